@@ -1,0 +1,26 @@
+#![doc = include_str!("../README.md")]
+#![cfg_attr(not(test), no_std)]
+#![forbid(unsafe_code)]
+#![doc(test(attr(deny(warnings))))]
+#![cfg_attr(
+    test,
+    allow(
+        clippy::arithmetic_side_effects,
+        clippy::cast_possible_truncation,
+        reason = "tests compute expected values freely; a panic is a failure"
+    )
+)]
+
+mod stretch;
+mod table;
+mod tracker;
+
+pub use stretch::{Measurement, StretchConfig, StretchConfigError, StretchMeter};
+pub use table::{CorrectionError, DistanceTable, TableError, correct};
+pub use tracker::{
+    EnterError, HeldTipper, InFlight, SOURCE_HOLD_PULSES, Snapshot, TipperEvent, Tracker,
+    TrackerError,
+};
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,323 @@
+//! The stretch meter: pulses counted between two reference initiators, filtered into DIA.
+
+use core::fmt;
+
+use crate::table::stretch_per_mille;
+
+/// How a [`StretchMeter`] judges its measurements.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
+pub struct StretchConfig {
+    /// SIA: pulses between the initiators when the chain was new (the static list's reference).
+    pub sia: u32,
+    /// How many consecutive equal measurements a new DIA needs before it is accepted.
+    /// 2 (the default) means a single missed or extra pulse never causes a recalculation:
+    /// the next measurement returns to the old value and the odd one is forgotten.
+    pub confirmations: u8,
+    /// A measurement further than this from SIA (per mille of SIA) is not a stretch but a
+    /// fault (a dead initiator, a chain break) and is rejected outright. Default 100 (10 %).
+    pub plausible_per_mille: u32,
+    /// Stretch (per mille, as [`StretchMeter::stretch_per_mille`]) past which the alarm is on:
+    /// time to shorten the chain. Default 20 (2 %, 8 m on a 400 m chain).
+    pub alarm_per_mille: u32,
+}
+
+impl StretchConfig {
+    /// The defaults for a chain with `sia` pulses between its initiators.
+    #[must_use]
+    pub const fn new(sia: u32) -> StretchConfig {
+        StretchConfig {
+            sia,
+            confirmations: 2,
+            plausible_per_mille: 100,
+            alarm_per_mille: 20,
+        }
+    }
+}
+
+/// A [`StretchConfig`] that cannot work.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum StretchConfigError {
+    /// SIA is 0.
+    ZeroReference,
+    /// `confirmations` is 0: at least one measurement is needed.
+    ZeroConfirmations,
+}
+
+impl fmt::Display for StretchConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StretchConfigError::ZeroReference => f.write_str("sia must not be 0"),
+            StretchConfigError::ZeroConfirmations => {
+                f.write_str("confirmations must be at least 1, got 0")
+            }
+        }
+    }
+}
+
+impl core::error::Error for StretchConfigError {}
+
+/// What one finished measurement did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Measurement {
+    /// Equal to the accepted DIA.
+    Unchanged,
+    /// Different, waiting for confirmation.
+    Pending {
+        /// The value measured.
+        dia: u32,
+    },
+    /// A new DIA, confirmed: recalibrate the distance table (and the tracker) with it.
+    Accepted {
+        /// The new DIA.
+        dia: u32,
+    },
+    /// Implausibly far from SIA: counted as a fault, ignored.
+    Implausible {
+        /// The value measured.
+        dia: u32,
+    },
+}
+
+/// Counts chain pulses between the two reference initiators and turns the counts into a DIA
+/// that only changes when the chain really has.
+///
+/// Call [`pulse`](StretchMeter::pulse) on every chain pulse, [`start`](StretchMeter::start)
+/// when the reference mark passes the first initiator and [`end`](StretchMeter::end) when it
+/// passes the second; `end` returns the [`Measurement`]. When it says
+/// [`Accepted`](Measurement::Accepted), hand the new DIA to
+/// [`Tracker::recalibrate`](crate::Tracker::recalibrate).
+///
+/// ```
+/// use regler_chain_tracker::{Measurement, StretchConfig, StretchMeter};
+/// let mut meter = StretchMeter::new(StretchConfig::new(3000))?;
+/// let measure = |meter: &mut StretchMeter, pulses: u32| {
+///     meter.start();
+///     for _ in 0..pulses { meter.pulse(); }
+///     meter.end()
+/// };
+/// assert_eq!(measure(&mut meter, 2999), Some(Measurement::Pending { dia: 2999 })); // one pulse missed
+/// assert_eq!(measure(&mut meter, 3000), Some(Measurement::Unchanged));             // forgotten
+/// assert_eq!(measure(&mut meter, 2985), Some(Measurement::Pending { dia: 2985 })); // stretched...
+/// assert_eq!(measure(&mut meter, 2985), Some(Measurement::Accepted { dia: 2985 })); // ...confirmed
+/// assert_eq!(meter.stretch_per_mille(), 5);
+/// # Ok::<(), regler_chain_tracker::StretchConfigError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct StretchMeter {
+    config: StretchConfig,
+    accepted: u32,
+    counting: Option<u32>,
+    candidate: Option<(u32, u8)>,
+    measurements: u32,
+    rejected: u32,
+    orphan_ends: u32,
+}
+
+impl StretchMeter {
+    /// A meter with DIA = SIA (a new chain).
+    pub const fn new(config: StretchConfig) -> Result<StretchMeter, StretchConfigError> {
+        StretchMeter::with_dia(config, config.sia)
+    }
+
+    /// A meter that already accepted `dia` (restored after a restart).
+    pub const fn with_dia(
+        config: StretchConfig,
+        dia: u32,
+    ) -> Result<StretchMeter, StretchConfigError> {
+        if config.sia == 0 {
+            return Err(StretchConfigError::ZeroReference);
+        }
+        if config.confirmations == 0 {
+            return Err(StretchConfigError::ZeroConfirmations);
+        }
+        Ok(StretchMeter {
+            config,
+            accepted: dia,
+            counting: None,
+            candidate: None,
+            measurements: 0,
+            rejected: 0,
+            orphan_ends: 0,
+        })
+    }
+
+    /// One chain pulse.
+    pub fn pulse(&mut self) {
+        if let Some(count) = &mut self.counting {
+            *count = count.saturating_add(1);
+        }
+    }
+
+    /// The reference mark passed the first initiator: counting starts (again) from zero.
+    pub fn start(&mut self) {
+        self.counting = Some(0);
+    }
+
+    /// The reference mark passed the second initiator: the count is judged. `None` when no
+    /// count was running (an `end` without a `start`, counted in
+    /// [`orphan_ends`](StretchMeter::orphan_ends)).
+    pub fn end(&mut self) -> Option<Measurement> {
+        let Some(dia) = self.counting.take() else {
+            self.orphan_ends = self.orphan_ends.saturating_add(1);
+            return None;
+        };
+        Some(self.measure(dia))
+    }
+
+    /// Judges one measured DIA, as [`end`](StretchMeter::end) does with its own count (for
+    /// plants whose hardware counts the pulses between the initiators).
+    pub fn measure(&mut self, dia: u32) -> Measurement {
+        self.measurements = self.measurements.saturating_add(1);
+        let limit =
+            u64::from(self.config.sia).saturating_mul(u64::from(self.config.plausible_per_mille));
+        let off = u64::from(self.config.sia.abs_diff(dia)).saturating_mul(1000);
+        if dia == 0 || off > limit {
+            self.rejected = self.rejected.saturating_add(1);
+            return Measurement::Implausible { dia };
+        }
+        if dia == self.accepted {
+            self.candidate = None;
+            return Measurement::Unchanged;
+        }
+        let seen = match self.candidate {
+            Some((value, seen)) if value == dia => seen.saturating_add(1),
+            _ => 1,
+        };
+        if seen >= self.config.confirmations {
+            self.candidate = None;
+            self.accepted = dia;
+            Measurement::Accepted { dia }
+        } else {
+            self.candidate = Some((dia, seen));
+            Measurement::Pending { dia }
+        }
+    }
+
+    /// The accepted DIA.
+    #[must_use]
+    pub const fn dia(&self) -> u32 {
+        self.accepted
+    }
+
+    /// Chain elongation of the accepted DIA, per mille: (SIA − DIA)/DIA.
+    #[must_use]
+    pub const fn stretch_per_mille(&self) -> i32 {
+        stretch_per_mille(self.config.sia, self.accepted)
+    }
+
+    /// Whether the stretch is past the configured alarm limit.
+    #[must_use]
+    pub const fn alarm(&self) -> bool {
+        let s = self.stretch_per_mille();
+        s > 0 && s.unsigned_abs() > self.config.alarm_per_mille
+    }
+
+    /// Measurements judged.
+    #[must_use]
+    pub const fn measurements(&self) -> u32 {
+        self.measurements
+    }
+
+    /// Measurements rejected as implausible.
+    #[must_use]
+    pub const fn rejected(&self) -> u32 {
+        self.rejected
+    }
+
+    /// `end` calls that came without a `start`.
+    #[must_use]
+    pub const fn orphan_ends(&self) -> u32 {
+        self.orphan_ends
+    }
+
+    /// The configuration.
+    #[must_use]
+    pub const fn config(&self) -> StretchConfig {
+        self.config
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_configs_are_refused() {
+        assert_eq!(
+            StretchMeter::new(StretchConfig::new(0)),
+            Err(StretchConfigError::ZeroReference)
+        );
+        let c = StretchConfig {
+            confirmations: 0,
+            ..StretchConfig::new(5)
+        };
+        assert_eq!(
+            StretchMeter::new(c),
+            Err(StretchConfigError::ZeroConfirmations)
+        );
+    }
+
+    #[test]
+    fn single_glitches_never_recalibrate() {
+        let mut m = StretchMeter::new(StretchConfig::new(3000)).unwrap();
+        for glitch in [2999, 3001, 2999, 3001] {
+            assert_eq!(m.measure(glitch), Measurement::Pending { dia: glitch });
+            assert_eq!(m.measure(3000), Measurement::Unchanged);
+        }
+        // Alternating glitches never confirm each other either.
+        assert_eq!(m.measure(2999), Measurement::Pending { dia: 2999 });
+        assert_eq!(m.measure(3001), Measurement::Pending { dia: 3001 });
+        assert_eq!(m.dia(), 3000);
+    }
+
+    #[test]
+    fn implausible_counts_are_faults() {
+        let mut m = StretchMeter::new(StretchConfig::new(3000)).unwrap();
+        assert_eq!(m.measure(0), Measurement::Implausible { dia: 0 });
+        assert_eq!(m.measure(6000), Measurement::Implausible { dia: 6000 });
+        assert_eq!(m.measure(2700), Measurement::Pending { dia: 2700 }); // exactly 10 %
+        assert_eq!(m.rejected(), 2);
+        assert_eq!(m.end(), None);
+        assert_eq!(m.orphan_ends(), 1);
+    }
+
+    #[test]
+    fn alarm_past_limit() {
+        let c = StretchConfig {
+            confirmations: 1,
+            alarm_per_mille: 5,
+            ..StretchConfig::new(3000)
+        };
+        let mut m = StretchMeter::new(c).unwrap();
+        assert_eq!(m.measure(2985), Measurement::Accepted { dia: 2985 });
+        assert!(!m.alarm()); // 5 ‰ is not past 5 ‰
+        m.measure(2980);
+        assert!(m.alarm());
+    }
+
+    #[test]
+    fn counting_restarts_on_start() {
+        let mut m = StretchMeter::new(StretchConfig {
+            confirmations: 1,
+            ..StretchConfig::new(10)
+        })
+        .unwrap();
+        m.start();
+        m.pulse();
+        m.start();
+        for _ in 0..9 {
+            m.pulse();
+        }
+        assert_eq!(m.end(), Some(Measurement::Accepted { dia: 9 }));
+        m.pulse(); // not counting: no effect
+        assert_eq!(m.dia(), 9);
+    }
+}

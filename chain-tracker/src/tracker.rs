@@ -1,0 +1,617 @@
+//! The tracker: trolleys on the chain, counted to their tippers by the chain pulses.
+
+use core::fmt;
+
+use heapless::Vec;
+
+use crate::table::{DistanceTable, TableError, correct};
+
+/// The hold of the source: a tipper is reset 6 pulses after it was set.
+pub const SOURCE_HOLD_PULSES: u32 = 6;
+
+const NIL: u32 = u32::MAX;
+
+/// Something the tipper outputs must do now.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum TipperEvent<K> {
+    /// `trolley` is over `tipper`: set the tipper output. It may already be set by a trolley
+    /// that arrived within the hold; it then stays set for the hold after this arrival.
+    Set {
+        /// The tipper.
+        tipper: usize,
+        /// The trolley that arrived.
+        trolley: K,
+    },
+    /// The hold after the last arrival at `tipper` has passed: reset the tipper output.
+    Reset {
+        /// The tipper.
+        tipper: usize,
+    },
+}
+
+/// Why [`Tracker::enter`] refused a trolley. The trolley is handed back; nothing changed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum EnterError<K> {
+    /// All `N` places are taken.
+    Full(K),
+    /// The distance table has no such tipper.
+    UnknownTipper {
+        /// The trolley, handed back.
+        trolley: K,
+        /// The tipper asked for.
+        tipper: usize,
+    },
+}
+
+impl<K> EnterError<K> {
+    /// The trolley that was refused.
+    pub fn into_trolley(self) -> K {
+        match self {
+            EnterError::Full(k) | EnterError::UnknownTipper { trolley: k, .. } => k,
+        }
+    }
+}
+
+impl<K> fmt::Display for EnterError<K> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            EnterError::Full(_) => f.write_str("tracker full: no room for another trolley"),
+            EnterError::UnknownTipper { tipper, .. } => {
+                write!(f, "no tipper {tipper} in the distance table")
+            }
+        }
+    }
+}
+
+impl<K: fmt::Debug> core::error::Error for EnterError<K> {}
+
+/// Why a tracker could not be built, recalibrated or restored. Nothing changed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum TrackerError {
+    /// A hold of 0 pulses would never let a tipper act.
+    ZeroHold,
+    /// The distance table refused.
+    Table(TableError),
+    /// Rescaling the remaining distances of the trolleys on the chain overflowed.
+    RescaleOverflow,
+    /// A snapshot names a tipper the table does not have.
+    UnknownTipper {
+        /// The tipper named.
+        tipper: usize,
+    },
+    /// A snapshot holds a trolley with 0 pulses to go (it would have arrived already).
+    ZeroRemaining,
+}
+
+impl fmt::Display for TrackerError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            TrackerError::ZeroHold => f.write_str("the tipper hold must be at least 1 pulse"),
+            TrackerError::Table(e) => write!(f, "distance table: {e}"),
+            TrackerError::RescaleOverflow => {
+                f.write_str("rescaled distance of a trolley on the chain does not fit in 32 bits")
+            }
+            TrackerError::UnknownTipper { tipper } => {
+                write!(
+                    f,
+                    "snapshot names tipper {tipper}, which the table does not have"
+                )
+            }
+            TrackerError::ZeroRemaining => {
+                f.write_str("snapshot holds a trolley with 0 pulses to go")
+            }
+        }
+    }
+}
+
+impl core::error::Error for TrackerError {}
+
+impl From<TableError> for TrackerError {
+    fn from(e: TableError) -> TrackerError {
+        TrackerError::Table(e)
+    }
+}
+
+/// One trolley on the chain, as listed by [`Tracker::in_flight`] and stored in a [`Snapshot`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct InFlight<K> {
+    /// The trolley.
+    pub trolley: K,
+    /// Its destination tipper.
+    pub tipper: usize,
+    /// Pulses until it is over its tipper (at least 1).
+    pub remaining: u32,
+}
+
+/// A tipper that is set, as stored in a [`Snapshot`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct HeldTipper {
+    /// The tipper.
+    pub tipper: usize,
+    /// Pulses until it is reset (at least 1).
+    pub remaining: u32,
+}
+
+/// Everything a [`Tracker`] needs to continue after a power failure, apart from its
+/// configuration (the static list, SIA and the hold, which live in program memory).
+///
+/// Write it to non-volatile memory (feature `serde`) when power fails; after the restart build
+/// the tracker from its configuration again and [`restore`](Tracker::restore) it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Snapshot<K, const N: usize, const T: usize> {
+    /// The pulse counter.
+    pub now: u32,
+    /// The DIA the distances were computed for.
+    pub dia: u32,
+    /// The trolleys on the chain, each tipper's in the order they entered.
+    pub in_flight: Vec<InFlight<K>, N>,
+    /// The tippers that are set.
+    pub held: Vec<HeldTipper, T>,
+}
+
+/// A place for one trolley. A used slot is linked into its tipper's queue, a free one into
+/// the free list, both through `next`.
+#[derive(Clone, Copy, Debug)]
+struct Slot<K> {
+    trolley: Option<K>,
+    /// Pulse count at which the trolley is over its tipper.
+    arrival: u32,
+    next: u32,
+}
+
+/// Per tipper: the queue of trolleys bound for it, and its output.
+#[derive(Clone, Copy, Debug)]
+struct Tipper {
+    head: u32,
+    tail: u32,
+    /// Pulse count at which the output is reset; `None` while it is not set.
+    reset_at: Option<u32>,
+}
+
+const IDLE_TIPPER: Tipper = Tipper {
+    head: NIL,
+    tail: NIL,
+    reset_at: None,
+};
+
+/// Trolleys on a dock chain, each counted by the chain pulses to its destination tipper.
+///
+/// A trolley [`enter`](Tracker::enter)s at the code reader with its destination tipper; its
+/// distance comes from the [`DistanceTable`]. Every [`pulse`](Tracker::pulse) moves all
+/// trolleys one pulse; when one is over its tipper the tracker emits [`TipperEvent::Set`], and
+/// [`TipperEvent::Reset`] `hold` pulses after the last arrival at that tipper. `K` is the
+/// caller's trolley tag (a trolley number, say); `N` trolleys fit on the chain, `T` tippers
+/// in the table.
+///
+/// **Cost.** The source kept one shift register and counted every entry down on every pulse:
+/// O(trolleys) per pulse. Here trolleys bound for one tipper arrive in the order they entered
+/// (they ride the same chain and cannot overtake), so each tipper keeps a FIFO queue, and a
+/// pulse only compares the pulse counter with the earliest pending arrival and reset: O(1) per
+/// pulse, plus O(T) when something arrives or resets. `enter` is O(1); `recalibrate` O(N + T).
+/// Nothing is allocated; the tracker's size is fixed by `N` and `T`.
+///
+/// **Recalibration.** When the chain has stretched, [`recalibrate`](Tracker::recalibrate)
+/// recomputes the distance table and rescales the remaining distance of every trolley already
+/// on the chain: the physical distance still to go is unchanged while each pulse now stands for
+/// a longer piece of chain, so `remaining' = remaining × DIA_new / DIA_old`, rounded half up
+/// (at least 1, and never ahead of the trolley before it).
+///
+/// **Wrapping.** The pulse counter wraps at `u32::MAX`; arrivals are compared by wrapping
+/// difference, so tracking carries on across the wrap.
+///
+/// ```
+/// use regler_chain_tracker::{DistanceTable, TipperEvent, Tracker};
+/// let table: DistanceTable<3> = DistanceTable::new(3000, &[10, 20, 30])?;
+/// let mut tracker: Tracker<u16, 64, 3> = Tracker::new(table, 6)?;
+/// tracker.enter(1977, 1).unwrap(); // trolley 1977 to tipper 1, 20 pulses on
+/// let mut events = Vec::new();
+/// for _ in 0..30 {
+///     tracker.pulse(|e| events.push(e));
+/// }
+/// assert_eq!(events, [
+///     TipperEvent::Set { tipper: 1, trolley: 1977 }, // after pulse 20
+///     TipperEvent::Reset { tipper: 1 },              // after pulse 26
+/// ]);
+/// # Ok::<(), regler_chain_tracker::TrackerError>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct Tracker<K, const N: usize, const T: usize> {
+    table: DistanceTable<T>,
+    hold: u32,
+    now: u32,
+    slots: [Slot<K>; N],
+    free: u32,
+    len: usize,
+    tippers: [Tipper; T],
+    next_arrival: Option<u32>,
+    next_reset: Option<u32>,
+}
+
+impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
+    /// A tracker with an empty chain, distances from `table`, tippers held `hold` pulses
+    /// ([`SOURCE_HOLD_PULSES`] in the source), pulse counter at 0.
+    pub fn new(table: DistanceTable<T>, hold: u32) -> Result<Tracker<K, N, T>, TrackerError> {
+        const {
+            assert!(N > 0, "a tracker holds at least one trolley");
+            assert!(N < NIL as usize, "at most u32::MAX - 1 trolleys");
+        }
+        if hold == 0 {
+            return Err(TrackerError::ZeroHold);
+        }
+        let mut tracker = Tracker {
+            table,
+            hold,
+            now: 0,
+            slots: [const {
+                Slot {
+                    trolley: None,
+                    arrival: 0,
+                    next: NIL,
+                }
+            }; N],
+            free: NIL,
+            len: 0,
+            tippers: [IDLE_TIPPER; T],
+            next_arrival: None,
+            next_reset: None,
+        };
+        tracker.clear();
+        Ok(tracker)
+    }
+
+    /// Takes every trolley off the chain and resets every tipper (without events).
+    pub fn clear(&mut self) {
+        let mut next = 0u32;
+        for slot in &mut self.slots {
+            next = next.saturating_add(1);
+            *slot = Slot {
+                trolley: None,
+                arrival: 0,
+                next,
+            };
+        }
+        if let Some(last) = self.slots.last_mut() {
+            last.next = NIL;
+        }
+        self.free = 0;
+        self.len = 0;
+        self.tippers = [IDLE_TIPPER; T];
+        self.next_arrival = None;
+        self.next_reset = None;
+    }
+
+    /// Puts `trolley` on the chain at the reader, bound for `tipper`: it arrives after
+    /// [`distance`](DistanceTable::distance)`(tipper)` pulses (a distance of 0 counts as 1).
+    /// It never arrives before a trolley that entered earlier for the same tipper.
+    pub fn enter(&mut self, trolley: K, tipper: usize) -> Result<(), EnterError<K>> {
+        let Some(distance) = self.table.distance(tipper) else {
+            return Err(EnterError::UnknownTipper { trolley, tipper });
+        };
+        self.push(trolley, tipper, distance.max(1))
+            .map_err(|()| EnterError::Full(trolley))
+    }
+
+    /// Appends a trolley to `tipper`'s queue, `distance` (≥ 1) pulses from now, or later if the
+    /// trolley ahead arrives later. `Err` when full or no such tipper.
+    fn push(&mut self, trolley: K, tipper: usize, distance: u32) -> Result<(), ()> {
+        let now = self.now;
+        let Some(queue) = self.tippers.get(tipper).copied() else {
+            return Err(());
+        };
+        let ahead = self
+            .slot(queue.tail)
+            .map_or(0, |(_, s)| s.arrival.wrapping_sub(now));
+        let arrival = now.wrapping_add(distance.max(ahead));
+        let index = self.free;
+        let slot = self.slots.get_mut(index_usize(index)).ok_or(())?;
+        self.free = slot.next;
+        *slot = Slot {
+            trolley: Some(trolley),
+            arrival,
+            next: NIL,
+        };
+        match self.slots.get_mut(index_usize(queue.tail)) {
+            Some(tail) => tail.next = index,
+            None => {
+                if let Some(q) = self.tippers.get_mut(tipper) {
+                    q.head = index;
+                }
+            }
+        }
+        if let Some(q) = self.tippers.get_mut(tipper) {
+            q.tail = index;
+        }
+        self.len = self.len.saturating_add(1);
+        if self
+            .next_arrival
+            .is_none_or(|a| a.wrapping_sub(now) > arrival.wrapping_sub(now))
+        {
+            self.next_arrival = Some(arrival);
+        }
+        Ok(())
+    }
+
+    /// The used slot at `index` with its trolley; `None` for `NIL`.
+    fn slot(&self, index: u32) -> Option<(K, &Slot<K>)> {
+        let slot = self.slots.get(index_usize(index))?;
+        Some((slot.trolley?, slot))
+    }
+
+    /// Advances the chain one pulse and reports what the tippers must do: sets first (in tipper
+    /// order), then resets. A tipper with an arrival in this pulse is not reset in it.
+    pub fn pulse(&mut self, mut on_event: impl FnMut(TipperEvent<K>)) {
+        self.now = self.now.wrapping_add(1);
+        if self.next_arrival == Some(self.now) {
+            self.arrive(&mut on_event);
+        }
+        if self.next_reset == Some(self.now) {
+            self.reset_due(&mut on_event);
+        }
+    }
+
+    /// Advances the chain `pulses` pulses, as many calls to [`pulse`](Tracker::pulse).
+    pub fn advance(&mut self, pulses: u32, mut on_event: impl FnMut(TipperEvent<K>)) {
+        for _ in 0..pulses {
+            self.pulse(&mut on_event);
+        }
+    }
+
+    fn arrive(&mut self, on_event: &mut impl FnMut(TipperEvent<K>)) {
+        let now = self.now;
+        let reset_at = now.wrapping_add(self.hold);
+        let mut next: Option<u32> = None;
+        for tipper in 0..T {
+            let Some(mut head) = self.tippers.get(tipper).map(|q| q.head) else {
+                break;
+            };
+            while let Some((trolley, &slot)) = self.slot(head) {
+                if slot.arrival != now {
+                    if next.is_none_or(|n| n.wrapping_sub(now) > slot.arrival.wrapping_sub(now)) {
+                        next = Some(slot.arrival);
+                    }
+                    break;
+                }
+                if let Some(s) = self.slots.get_mut(index_usize(head)) {
+                    *s = Slot {
+                        trolley: None,
+                        arrival: 0,
+                        next: self.free,
+                    };
+                    self.free = head;
+                }
+                self.len = self.len.saturating_sub(1);
+                head = slot.next;
+                if let Some(q) = self.tippers.get_mut(tipper) {
+                    q.head = head;
+                    if head == NIL {
+                        q.tail = NIL;
+                    }
+                    q.reset_at = Some(reset_at);
+                }
+                // Resets are all `hold` after their set, so an earlier one stays earliest.
+                if self.next_reset.is_none() {
+                    self.next_reset = Some(reset_at);
+                }
+                on_event(TipperEvent::Set { tipper, trolley });
+            }
+        }
+        self.next_arrival = next;
+    }
+
+    fn reset_due(&mut self, on_event: &mut impl FnMut(TipperEvent<K>)) {
+        let now = self.now;
+        let mut next: Option<u32> = None;
+        for (tipper, q) in self.tippers.iter_mut().enumerate() {
+            match q.reset_at {
+                Some(at) if at == now => {
+                    q.reset_at = None;
+                    on_event(TipperEvent::Reset { tipper });
+                }
+                Some(at) if next.is_none_or(|n| n.wrapping_sub(now) > at.wrapping_sub(now)) => {
+                    next = Some(at);
+                }
+                _ => {}
+            }
+        }
+        self.next_reset = next;
+    }
+
+    /// Takes a new DIA (from a [`StretchMeter`](crate::StretchMeter)): recomputes the distance
+    /// table and rescales the trolleys on the chain (see the type's docs). Returns whether
+    /// anything changed; on an error nothing did.
+    pub fn recalibrate(&mut self, dia: u32) -> Result<bool, TrackerError> {
+        let old = self.table.dia();
+        if dia == old {
+            return Ok(false);
+        }
+        let da = self.table.corrected(dia)?;
+        let now = self.now;
+        // Remaining distances grow or shrink monotonically with the rescale, so if the longest
+        // fits, all do: check it before changing anything.
+        let longest = (0..T)
+            .filter_map(|t| self.tippers.get(t).and_then(|q| self.slot(q.tail)))
+            .map(|(_, s)| s.arrival.wrapping_sub(now))
+            .max()
+            .unwrap_or(0);
+        correct(longest, dia, old).map_err(|_| TrackerError::RescaleOverflow)?;
+        self.table.commit(dia, da);
+        let mut next: Option<u32> = None;
+        for tipper in 0..T {
+            let mut index = self.tippers.get(tipper).map_or(NIL, |q| q.head);
+            let mut ahead = 1u32;
+            while let Some(slot) = self.slots.get_mut(index_usize(index)) {
+                let remaining = slot.arrival.wrapping_sub(now);
+                let scaled = correct(remaining, dia, old).unwrap_or(remaining).max(ahead);
+                slot.arrival = now.wrapping_add(scaled);
+                ahead = scaled;
+                if next.is_none_or(|n| n.wrapping_sub(now) > scaled) {
+                    next = Some(slot.arrival);
+                }
+                index = slot.next;
+            }
+        }
+        self.next_arrival = next;
+        Ok(true)
+    }
+
+    /// The trolleys on the chain: tipper by tipper, each tipper's in the order they entered.
+    pub fn in_flight(&self) -> impl Iterator<Item = InFlight<K>> + '_ {
+        let now = self.now;
+        self.tippers
+            .iter()
+            .enumerate()
+            .flat_map(move |(tipper, q)| {
+                let mut index = q.head;
+                core::iter::from_fn(move || {
+                    let (trolley, slot) = self.slot(index)?;
+                    index = slot.next;
+                    Some(InFlight {
+                        trolley,
+                        tipper,
+                        remaining: slot.arrival.wrapping_sub(now),
+                    })
+                })
+            })
+    }
+
+    /// Whether `tipper`'s output is set (`false` for an unknown tipper).
+    #[must_use]
+    pub fn is_set(&self, tipper: usize) -> bool {
+        self.tippers
+            .get(tipper)
+            .is_some_and(|q| q.reset_at.is_some())
+    }
+
+    /// Trolleys on the chain.
+    #[must_use]
+    pub const fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the chain carries no tracked trolley.
+    #[must_use]
+    pub const fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Trolleys the tracker has room for (`N`).
+    #[must_use]
+    pub const fn capacity(&self) -> usize {
+        N
+    }
+
+    /// The pulse counter (wrapping).
+    #[must_use]
+    pub const fn now(&self) -> u32 {
+        self.now
+    }
+
+    /// Sets the pulse counter (to line it up with a hardware counter); distances to go are kept.
+    pub fn set_now(&mut self, now: u32) {
+        let delta = now.wrapping_sub(self.now);
+        for slot in &mut self.slots {
+            slot.arrival = slot.arrival.wrapping_add(delta);
+        }
+        for q in &mut self.tippers {
+            q.reset_at = q.reset_at.map(|r| r.wrapping_add(delta));
+        }
+        self.next_arrival = self.next_arrival.map(|a| a.wrapping_add(delta));
+        self.next_reset = self.next_reset.map(|r| r.wrapping_add(delta));
+        self.now = now;
+    }
+
+    /// The hold in pulses.
+    #[must_use]
+    pub const fn hold(&self) -> u32 {
+        self.hold
+    }
+
+    /// The distance table in use.
+    #[must_use]
+    pub const fn table(&self) -> &DistanceTable<T> {
+        &self.table
+    }
+
+    /// The tracker's state, for non-volatile memory.
+    #[must_use]
+    pub fn snapshot(&self) -> Snapshot<K, N, T> {
+        let now = self.now;
+        let mut snapshot = Snapshot {
+            now,
+            dia: self.table.dia(),
+            in_flight: Vec::new(),
+            held: Vec::new(),
+        };
+        for trolley in self.in_flight() {
+            // ok to ignore: in_flight yields at most N items, the capacity.
+            let _ = snapshot.in_flight.push(trolley);
+        }
+        for (tipper, q) in self.tippers.iter().enumerate() {
+            if let Some(at) = q.reset_at {
+                let _ = snapshot.held.push(HeldTipper {
+                    tipper,
+                    remaining: at.wrapping_sub(now),
+                });
+            }
+        }
+        snapshot
+    }
+
+    /// Replaces the state with `snapshot` (taken from a tracker with the same configuration).
+    /// The snapshot is checked first; on an error nothing changes.
+    pub fn restore(&mut self, snapshot: &Snapshot<K, N, T>) -> Result<(), TrackerError> {
+        let tippers = self.table.tippers();
+        for t in &snapshot.in_flight {
+            if t.tipper >= tippers {
+                return Err(TrackerError::UnknownTipper { tipper: t.tipper });
+            }
+            if t.remaining == 0 {
+                return Err(TrackerError::ZeroRemaining);
+            }
+        }
+        for h in &snapshot.held {
+            if h.tipper >= tippers {
+                return Err(TrackerError::UnknownTipper { tipper: h.tipper });
+            }
+            if h.remaining == 0 {
+                return Err(TrackerError::ZeroRemaining);
+            }
+        }
+        let da = self.table.corrected(snapshot.dia)?;
+        self.table.commit(snapshot.dia, da);
+        self.clear();
+        self.now = snapshot.now;
+        for t in &snapshot.in_flight {
+            // Capacity N and tipper range were checked: push cannot fail.
+            let _ = self.push(t.trolley, t.tipper, t.remaining);
+        }
+        for h in &snapshot.held {
+            let at = snapshot.now.wrapping_add(h.remaining);
+            if let Some(q) = self.tippers.get_mut(h.tipper) {
+                q.reset_at = Some(at);
+            }
+            if self
+                .next_reset
+                .is_none_or(|n| n.wrapping_sub(snapshot.now) > h.remaining)
+            {
+                self.next_reset = Some(at);
+            }
+        }
+        Ok(())
+    }
+}
+
+fn index_usize(index: u32) -> usize {
+    usize::try_from(index).unwrap_or(usize::MAX)
+}

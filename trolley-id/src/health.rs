@@ -1,0 +1,348 @@
+//! Per-reader health: what the last passages at one reader looked like, and an alarm.
+
+use core::fmt;
+
+use crate::voter::{Passage, Verdict};
+
+const PARITY: u8 = 1;
+const NO_READ: u8 = 1 << 1;
+const DISAGREEMENT: u8 = 1 << 2;
+const FAULTY: u8 = 1 << 3;
+
+/// Counts of passages at one reader: how many there were and how many showed each symptom.
+///
+/// A passage counts once per symptom however many of its readings showed it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct HealthStats {
+    /// Passages.
+    pub passages: u32,
+    /// Passages with at least one parity error.
+    pub parity_errors: u32,
+    /// Passages whose verdict was a no-read.
+    pub no_reads: u32,
+    /// Passages in which two different trolley numbers were decoded.
+    pub disagreements: u32,
+    /// Passages with a word that had bits above the 13 cams.
+    pub faulty_words: u32,
+}
+
+impl HealthStats {
+    /// No passages at all.
+    pub const ZERO: HealthStats = HealthStats {
+        passages: 0,
+        parity_errors: 0,
+        no_reads: 0,
+        disagreements: 0,
+        faulty_words: 0,
+    };
+
+    fn add(&mut self, flags: u8) {
+        let bump = |count: &mut u32, flag: u8| {
+            if flags & flag != 0 {
+                *count = count.saturating_add(1);
+            }
+        };
+        self.passages = self.passages.saturating_add(1);
+        bump(&mut self.parity_errors, PARITY);
+        bump(&mut self.no_reads, NO_READ);
+        bump(&mut self.disagreements, DISAGREEMENT);
+        bump(&mut self.faulty_words, FAULTY);
+    }
+
+    fn remove(&mut self, flags: u8) {
+        let drop = |count: &mut u32, flag: u8| {
+            if flags & flag != 0 {
+                *count = count.saturating_sub(1);
+            }
+        };
+        self.passages = self.passages.saturating_sub(1);
+        drop(&mut self.parity_errors, PARITY);
+        drop(&mut self.no_reads, NO_READ);
+        drop(&mut self.disagreements, DISAGREEMENT);
+        drop(&mut self.faulty_words, FAULTY);
+    }
+
+    /// `count` per thousand passages, rounded down (0 when there were no passages).
+    #[must_use]
+    pub fn per_mille(&self, count: u32) -> u32 {
+        let scaled = u64::from(count)
+            .saturating_mul(1000)
+            .checked_div(u64::from(self.passages))
+            .unwrap_or(0);
+        u32::try_from(scaled).unwrap_or(u32::MAX)
+    }
+}
+
+/// When a reader's alarm goes on and off.
+///
+/// The alarm is raised when, over a window holding at least `min_passages` passages, the share
+/// of no-reads or of disagreements exceeds its limit (per mille). It clears only when both have
+/// fallen to half their limits, so a reader near its limit does not make the alarm chatter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct AlarmLimits {
+    /// No-reads per thousand passages above which the alarm is raised.
+    pub no_read_per_mille: u32,
+    /// Disagreements per thousand passages above which the alarm is raised.
+    pub disagreement_per_mille: u32,
+    /// Passages the window must hold before the alarm can be raised.
+    pub min_passages: u32,
+}
+
+impl Default for AlarmLimits {
+    /// 5 ‰ no-reads or 10 ‰ disagreements, over at least 100 passages: five times the
+    /// plant-wide misread rate of the source (1 read in 1000).
+    fn default() -> AlarmLimits {
+        AlarmLimits {
+            no_read_per_mille: 5,
+            disagreement_per_mille: 10,
+            min_passages: 100,
+        }
+    }
+}
+
+/// A change of a reader's alarm.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum AlarmChange {
+    /// The alarm went on.
+    Raised,
+    /// The alarm went off.
+    Cleared,
+}
+
+/// Health of one reader over a sliding window of its last `W` passages, with lifetime totals
+/// and an alarm.
+///
+/// Each passage costs O(1) whatever `W`; the window takes `W` bytes.
+///
+/// ```
+/// use regler_trolley_id::{AlarmChange, AlarmLimits, encode, ReaderHealth, Strategy, TrolleyId, Voter};
+/// let limits = AlarmLimits { no_read_per_mille: 100, disagreement_per_mille: 1000, min_passages: 10 };
+/// let mut health: ReaderHealth<50> = ReaderHealth::new(limits);
+/// let mut voter = Voter::new(Strategy::Consecutive { k: 2 })?;
+/// let good = encode(TrolleyId::new(7).unwrap());
+/// for _ in 0..9 {
+///     assert_eq!(health.record(&voter.vote(&[good, good])), None);
+/// }
+/// // Two no-reads in eleven passages is 181 ‰, above the 100 ‰ limit.
+/// health.record(&voter.vote(&[0x0001]));
+/// assert_eq!(health.record(&voter.vote(&[0x0001])), Some(AlarmChange::Raised));
+/// assert!(health.alarm());
+/// assert_eq!(health.window().no_reads, 2);
+/// # Ok::<(), regler_trolley_id::StrategyError>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct ReaderHealth<const W: usize> {
+    limits: AlarmLimits,
+    ring: [u8; W],
+    next: usize,
+    window: HealthStats,
+    totals: HealthStats,
+    alarm: bool,
+    alarms_raised: u32,
+}
+
+impl<const W: usize> ReaderHealth<W> {
+    /// A reader with no passages yet, raising its alarm at `limits`.
+    #[must_use]
+    pub const fn new(limits: AlarmLimits) -> ReaderHealth<W> {
+        const { assert!(W > 0, "a reader health window holds at least one passage") };
+        ReaderHealth {
+            limits,
+            ring: [0; W],
+            next: 0,
+            window: HealthStats::ZERO,
+            totals: HealthStats::ZERO,
+            alarm: false,
+            alarms_raised: 0,
+        }
+    }
+
+    /// Records one passage; returns the alarm change it caused, if any.
+    pub fn record(&mut self, passage: &Passage) -> Option<AlarmChange> {
+        let mut flags = 0;
+        if passage.parity_errors > 0 {
+            flags |= PARITY;
+        }
+        if matches!(passage.verdict, Verdict::NoRead(_)) {
+            flags |= NO_READ;
+        }
+        if passage.disagreement {
+            flags |= DISAGREEMENT;
+        }
+        if passage.faulty_words > 0 {
+            flags |= FAULTY;
+        }
+        let full = usize::try_from(self.window.passages).map_or(true, |n| n >= W);
+        if let Some(slot) = self.ring.get_mut(self.next) {
+            if full {
+                self.window.remove(*slot);
+            }
+            *slot = flags;
+        }
+        self.next = match self.next.checked_add(1) {
+            Some(n) if n < W => n,
+            _ => 0,
+        };
+        self.window.add(flags);
+        self.totals.add(flags);
+        self.update_alarm()
+    }
+
+    fn update_alarm(&mut self) -> Option<AlarmChange> {
+        let w = &self.window;
+        let no_reads = w.per_mille(w.no_reads);
+        let disagreements = w.per_mille(w.disagreements);
+        let l = &self.limits;
+        if !self.alarm
+            && w.passages >= l.min_passages
+            && (no_reads > l.no_read_per_mille || disagreements > l.disagreement_per_mille)
+        {
+            self.alarm = true;
+            self.alarms_raised = self.alarms_raised.saturating_add(1);
+            return Some(AlarmChange::Raised);
+        }
+        if self.alarm
+            && no_reads <= l.no_read_per_mille / 2
+            && disagreements <= l.disagreement_per_mille / 2
+        {
+            self.alarm = false;
+            return Some(AlarmChange::Cleared);
+        }
+        None
+    }
+
+    /// Statistics over the last `W` passages (fewer while the window fills).
+    #[must_use]
+    pub const fn window(&self) -> HealthStats {
+        self.window
+    }
+
+    /// Statistics over every passage since creation or [`reset`](ReaderHealth::reset)
+    /// (saturating at `u32::MAX`).
+    #[must_use]
+    pub const fn totals(&self) -> HealthStats {
+        self.totals
+    }
+
+    /// Whether the alarm is on.
+    #[must_use]
+    pub const fn alarm(&self) -> bool {
+        self.alarm
+    }
+
+    /// How many times the alarm was raised.
+    #[must_use]
+    pub const fn alarms_raised(&self) -> u32 {
+        self.alarms_raised
+    }
+
+    /// The limits in force.
+    #[must_use]
+    pub const fn limits(&self) -> AlarmLimits {
+        self.limits
+    }
+
+    /// Forgets every passage (after the reader was repaired) and clears the alarm.
+    pub fn reset(&mut self) {
+        *self = ReaderHealth::new(self.limits);
+    }
+}
+
+impl fmt::Display for HealthStats {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} passages, {} with parity errors, {} no-reads, {} disagreements, {} faulty",
+            self.passages, self.parity_errors, self.no_reads, self.disagreements, self.faulty_words
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{NoRead, TrolleyId};
+
+    fn passage(no_read: bool, parity: u16, disagreement: bool) -> Passage {
+        Passage {
+            verdict: if no_read {
+                Verdict::NoRead(NoRead::NoAgreement)
+            } else {
+                Verdict::Identified(TrolleyId::MIN)
+            },
+            samples: 3,
+            no_cams: 0,
+            parity_errors: parity,
+            faulty_words: 0,
+            disagreement,
+        }
+    }
+
+    #[test]
+    fn window_forgets_old_passages_totals_do_not() {
+        let mut h: ReaderHealth<4> = ReaderHealth::new(AlarmLimits::default());
+        h.record(&passage(true, 2, true));
+        for _ in 0..4 {
+            h.record(&passage(false, 0, false));
+        }
+        assert_eq!(
+            h.window(),
+            HealthStats {
+                passages: 4,
+                ..HealthStats::default()
+            }
+        );
+        assert_eq!(h.totals().passages, 5);
+        assert_eq!(h.totals().no_reads, 1);
+        assert_eq!(h.totals().parity_errors, 1);
+        assert_eq!(h.totals().disagreements, 1);
+    }
+
+    #[test]
+    fn alarm_raises_above_limit_and_clears_at_half() {
+        let limits = AlarmLimits {
+            no_read_per_mille: 200,
+            disagreement_per_mille: 1000,
+            min_passages: 5,
+        };
+        let mut h: ReaderHealth<10> = ReaderHealth::new(limits);
+        // Three no-reads among the first four: below min_passages, no alarm yet.
+        for nr in [true, true, true, false] {
+            assert_eq!(h.record(&passage(nr, 0, false)), None);
+        }
+        assert_eq!(
+            h.record(&passage(false, 0, false)),
+            Some(AlarmChange::Raised)
+        );
+        assert_eq!(h.alarms_raised(), 1);
+        // 3/10 no-reads after ten passages: still on; clears when <= 100 ‰ (1 in 10).
+        let mut cleared_at = None;
+        for i in 0..10 {
+            if h.record(&passage(false, 0, false)) == Some(AlarmChange::Cleared) {
+                cleared_at = Some(i);
+            }
+        }
+        // Record 6 + i; the window of 10 drops the no-reads of records 1, 2, 3 at records
+        // 11, 12, 13. After record 12 (i = 6) one no-read is left: 100 ‰, half the limit.
+        assert_eq!(cleared_at, Some(6));
+        assert!(!h.alarm());
+        h.reset();
+        assert_eq!(h.totals().passages, 0);
+    }
+
+    #[test]
+    fn per_mille_handles_zero_and_rounds_down() {
+        let s = HealthStats {
+            passages: 3,
+            no_reads: 1,
+            ..HealthStats::default()
+        };
+        assert_eq!(s.per_mille(s.no_reads), 333);
+        assert_eq!(HealthStats::default().per_mille(5), 0);
+    }
+}
