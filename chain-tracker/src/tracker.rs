@@ -170,11 +170,14 @@ struct Slot<K> {
     next: u32,
 }
 
-/// Per tipper: the queue of trolleys bound for it, and its output.
+/// Per tipper: the queue of trolleys bound for it, and its output. The arrivals of the head
+/// and tail are kept here too, so that a pulse reads the slots only of trolleys that arrive.
 #[derive(Clone, Copy, Debug)]
 struct Tipper {
     head: u32,
     tail: u32,
+    head_arrival: u32,
+    tail_arrival: u32,
     /// Pulse count at which the output is reset; `None` while it is not set.
     reset_at: Option<u32>,
 }
@@ -182,6 +185,8 @@ struct Tipper {
 const IDLE_TIPPER: Tipper = Tipper {
     head: NIL,
     tail: NIL,
+    head_arrival: 0,
+    tail_arrival: 0,
     reset_at: None,
 };
 
@@ -309,9 +314,11 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
         let Some(queue) = self.tippers.get(tipper).copied() else {
             return Err(());
         };
-        let ahead = self
-            .slot(queue.tail)
-            .map_or(0, |(_, s)| s.arrival.wrapping_sub(now));
+        let ahead = if queue.tail == NIL {
+            0
+        } else {
+            queue.tail_arrival.wrapping_sub(now)
+        };
         let arrival = now.wrapping_add(distance.max(ahead));
         let index = self.free;
         let slot = self.slots.get_mut(index_usize(index)).ok_or(())?;
@@ -321,16 +328,16 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
             arrival,
             next: NIL,
         };
-        match self.slots.get_mut(index_usize(queue.tail)) {
-            Some(tail) => tail.next = index,
-            None => {
-                if let Some(q) = self.tippers.get_mut(tipper) {
-                    q.head = index;
-                }
-            }
+        if let Some(tail) = self.slots.get_mut(index_usize(queue.tail)) {
+            tail.next = index;
         }
         if let Some(q) = self.tippers.get_mut(tipper) {
+            if q.head == NIL {
+                q.head = index;
+                q.head_arrival = arrival;
+            }
             q.tail = index;
+            q.tail_arrival = arrival;
         }
         self.len = self.len.saturating_add(1);
         if self
@@ -372,38 +379,45 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
         let reset_at = now.wrapping_add(self.hold);
         let mut next: Option<u32> = None;
         for tipper in 0..T {
-            let Some(mut head) = self.tippers.get(tipper).map(|q| q.head) else {
+            let Some(&q) = self.tippers.get(tipper) else {
                 break;
             };
-            while let Some((trolley, &slot)) = self.slot(head) {
-                if slot.arrival != now {
-                    if next.is_none_or(|n| n.wrapping_sub(now) > slot.arrival.wrapping_sub(now)) {
-                        next = Some(slot.arrival);
-                    }
+            let (mut head, mut head_arrival) = (q.head, q.head_arrival);
+            let mut arrived = false;
+            while head != NIL && head_arrival == now {
+                let Some(slot) = self.slots.get_mut(index_usize(head)) else {
                     break;
-                }
-                if let Some(s) = self.slots.get_mut(index_usize(head)) {
-                    *s = Slot {
-                        trolley: None,
-                        arrival: 0,
-                        next: self.free,
-                    };
-                    self.free = head;
-                }
+                };
+                let trolley = slot.trolley.take();
+                let following = slot.next;
+                slot.next = self.free;
+                self.free = head;
                 self.len = self.len.saturating_sub(1);
-                head = slot.next;
-                if let Some(q) = self.tippers.get_mut(tipper) {
+                head = following;
+                head_arrival = self.slots.get(index_usize(head)).map_or(0, |s| s.arrival);
+                arrived = true;
+                if let Some(trolley) = trolley {
+                    on_event(TipperEvent::Set { tipper, trolley });
+                }
+            }
+            if let Some(q) = self.tippers.get_mut(tipper) {
+                if arrived {
                     q.head = head;
+                    q.head_arrival = head_arrival;
                     if head == NIL {
                         q.tail = NIL;
                     }
                     q.reset_at = Some(reset_at);
+                    // Resets are all `hold` after their set, so an earlier one stays earliest.
+                    if self.next_reset.is_none() {
+                        self.next_reset = Some(reset_at);
+                    }
                 }
-                // Resets are all `hold` after their set, so an earlier one stays earliest.
-                if self.next_reset.is_none() {
-                    self.next_reset = Some(reset_at);
+                if head != NIL
+                    && next.is_none_or(|n| n.wrapping_sub(now) > head_arrival.wrapping_sub(now))
+                {
+                    next = Some(head_arrival);
                 }
-                on_event(TipperEvent::Set { tipper, trolley });
             }
         }
         self.next_arrival = next;
@@ -439,25 +453,33 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
         let now = self.now;
         // Remaining distances grow or shrink monotonically with the rescale, so if the longest
         // fits, all do: check it before changing anything.
-        let longest = (0..T)
-            .filter_map(|t| self.tippers.get(t).and_then(|q| self.slot(q.tail)))
-            .map(|(_, s)| s.arrival.wrapping_sub(now))
+        let longest = self
+            .tippers
+            .iter()
+            .filter(|q| q.tail != NIL)
+            .map(|q| q.tail_arrival.wrapping_sub(now))
             .max()
             .unwrap_or(0);
         correct(longest, dia, old).map_err(|_| TrackerError::RescaleOverflow)?;
         self.table.commit(dia, da);
         let mut next: Option<u32> = None;
-        for tipper in 0..T {
-            let mut index = self.tippers.get(tipper).map_or(NIL, |q| q.head);
+        for q in &mut self.tippers {
+            let mut index = q.head;
             let mut ahead = 1u32;
             while let Some(slot) = self.slots.get_mut(index_usize(index)) {
                 let remaining = slot.arrival.wrapping_sub(now);
                 let scaled = correct(remaining, dia, old).unwrap_or(remaining).max(ahead);
                 slot.arrival = now.wrapping_add(scaled);
-                ahead = scaled;
-                if next.is_none_or(|n| n.wrapping_sub(now) > scaled) {
-                    next = Some(slot.arrival);
+                if index == q.head {
+                    q.head_arrival = slot.arrival;
+                    if next.is_none_or(|n| n.wrapping_sub(now) > scaled) {
+                        next = Some(slot.arrival);
+                    }
                 }
+                if index == q.tail {
+                    q.tail_arrival = slot.arrival;
+                }
+                ahead = scaled;
                 index = slot.next;
             }
         }
@@ -525,6 +547,8 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
         }
         for q in &mut self.tippers {
             q.reset_at = q.reset_at.map(|r| r.wrapping_add(delta));
+            q.head_arrival = q.head_arrival.wrapping_add(delta);
+            q.tail_arrival = q.tail_arrival.wrapping_add(delta);
         }
         self.next_arrival = self.next_arrival.map(|a| a.wrapping_add(delta));
         self.next_reset = self.next_reset.map(|r| r.wrapping_add(delta));

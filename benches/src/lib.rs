@@ -1,0 +1,6 @@
+//! The anchors the regler crates are measured against, and the workloads the benches and the
+//! instruction-count binaries share. Nothing here is meant for production use.
+
+pub mod count_down;
+pub mod dock;
+pub mod naive_decode;
