@@ -43,7 +43,7 @@ impl Feed {
     /// One step: possibly a trolley to enter (trolley, tipper), then one pulse.
     pub fn step(&mut self) -> Option<(u32, usize)> {
         self.pulse += 1;
-        if self.pulse % u64::from(SPACING) != 0 {
+        if !self.pulse.is_multiple_of(u64::from(SPACING)) {
             return None;
         }
         self.next_trolley = self.next_trolley.wrapping_add(1);

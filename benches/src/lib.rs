@@ -4,3 +4,4 @@
 pub mod count_down;
 pub mod dock;
 pub mod naive_decode;
+pub mod pid_loop;

@@ -179,7 +179,7 @@ impl<T: Scalar> Pid<T> {
             faults: Faults::default(),
         };
         pid.set_coefficients(config);
-        pid.u_old = clamp(T::ZERO, pid.ymin, pid.ymax);
+        pid.u_old = T::ZERO.clamp_within(pid.ymin, pid.ymax);
         Ok(pid)
     }
 
@@ -192,14 +192,16 @@ impl<T: Scalar> Pid<T> {
         self.kp = f(if kind.has_p() { s * config.k } else { 0.0 });
         self.b = f(config.b);
         self.c = f(config.c);
+        // Same operation order as the reference algorithm (s·bi, s·bd), so f64 results agree
+        // to the last bit.
         self.bi = f(if kind.has_i() {
-            s * gain * config.h / config.ti
+            s * (gain * config.h / config.ti)
         } else {
             0.0
         });
         self.ad = f(if kind.has_d() { config.td / dn } else { 0.0 });
         self.bd = f(if kind.has_d() {
-            s * gain * config.td * config.n / dn
+            s * (gain * config.td * config.n / dn)
         } else {
             0.0
         });
@@ -217,18 +219,21 @@ impl<T: Scalar> Pid<T> {
     /// One sample: the output for set-point `r` and measurement `y`.
     #[inline]
     pub fn update(&mut self, setpoint: T, measurement: T) -> T {
-        self.update_with(setpoint, measurement, Inputs::default())
+        self.step::<false>(setpoint, measurement, T::ZERO, None)
     }
 
     /// One sample with feed-forward and an external tracking value (see [`Inputs`]).
     /// Returns the controller's own output (before any outside selection).
     pub fn update_with(&mut self, setpoint: T, measurement: T, inputs: Inputs<T>) -> T {
-        let (r, y) = (setpoint, measurement);
-        let track_ok = inputs.track.is_none_or(Scalar::is_finite);
-        if !(r.is_finite() && y.is_finite() && inputs.feedforward.is_finite() && track_ok) {
+        if !(inputs.feedforward.is_finite() && inputs.track.is_none_or(Scalar::is_finite)) {
             self.faults.0 |= Faults::NON_FINITE_INPUT;
             return self.u_old;
         }
+        self.step::<true>(setpoint, measurement, inputs.feedforward, inputs.track)
+    }
+
+    #[inline(always)]
+    fn step<const FEEDFORWARD: bool>(&mut self, r: T, y: T, feedforward: T, track: Option<T>) -> T {
         if !self.started {
             self.y_old = y;
             self.r_old = r;
@@ -238,7 +243,7 @@ impl<T: Scalar> Pid<T> {
         let change = y
             .sub(self.c.mul(r))
             .sub(self.y_old.sub(self.c.mul(self.r_old)));
-        let d = self.ad.mul(self.d).sub(self.bd.mul(change));
+        let d = self.ad.mul(self.d).sub(self.bd.mul(change)).flush_tiny();
         let (v, u, i) = match self.mode {
             Mode::Manual => {
                 // The operator's output stands; I follows so that v = u when auto returns.
@@ -246,30 +251,43 @@ impl<T: Scalar> Pid<T> {
                 (u, u, u.sub(p).sub(d))
             }
             Mode::Auto => {
-                let v = p.add(self.i).add(d).add(inputs.feedforward);
+                let mut v = p.add(self.i).add(d);
+                if FEEDFORWARD {
+                    v = v.add(feedforward);
+                }
                 let mut u = v;
                 if self.has_dymax {
-                    u = clamp(u, self.u_old.sub(self.dymax), self.u_old.add(self.dymax));
+                    u = u.clamp_within(self.u_old.sub(self.dymax), self.u_old.add(self.dymax));
                 }
-                u = clamp(u, self.ymin, self.ymax);
-                let applied = inputs.track.unwrap_or(u);
-                let i = self
-                    .i
-                    .add(self.bi.mul(r.sub(y)))
-                    .add(self.ao.mul(applied.sub(v)));
+                u = u.clamp_within(self.ymin, self.ymax);
+                let applied = track.unwrap_or(u);
+                // I + (integral step + tracking), summed in the reference's order.
+                let step = self.bi.mul(r.sub(y)).add(self.ao.mul(applied.sub(v)));
+                let i = self.i.add(step);
                 (v, u, i)
             }
         };
-        if !(v.is_finite() && i.is_finite() && d.is_finite()) {
-            self.faults.0 |= Faults::OVERFLOW;
+        // A NaN or infinite set-point or measurement reaches v or I whatever the coefficients
+        // (0·∞ is NaN), so two checks guard both inputs and overflow.
+        if !T::both_finite(v, i) {
+            self.fault(r, y);
             return self.u_old;
         }
         self.i = i;
         self.d = d;
         self.y_old = y;
         self.r_old = r;
-        self.u_old = inputs.track.unwrap_or(u);
+        self.u_old = track.unwrap_or(u);
         u
+    }
+
+    #[cold]
+    fn fault(&mut self, r: T, y: T) {
+        self.faults.0 |= if r.is_finite() && y.is_finite() {
+            Faults::OVERFLOW
+        } else {
+            Faults::NON_FINITE_INPUT
+        };
     }
 
     /// Changes the parameters, bumplessly: the integral is adjusted so that the output would
@@ -303,7 +321,7 @@ impl<T: Scalar> Pid<T> {
         if !u.is_finite() {
             return Err(ValueError::NotFinite);
         }
-        self.u_old = clamp(u, self.ymin, self.ymax);
+        self.u_old = u.clamp_within(self.ymin, self.ymax);
         self.mode = Mode::Manual;
         Ok(())
     }
@@ -360,18 +378,7 @@ impl<T: Scalar> Pid<T> {
         self.started = false;
         self.mode = Mode::Auto;
         self.faults = Faults::default();
-        self.u_old = clamp(T::ZERO, self.ymin, self.ymax);
-    }
-}
-
-#[inline(always)]
-fn clamp<T: Scalar>(v: T, lo: T, hi: T) -> T {
-    if v < lo {
-        lo
-    } else if v > hi {
-        hi
-    } else {
-        v
+        self.u_old = T::ZERO.clamp_within(self.ymin, self.ymax);
     }
 }
 

@@ -160,7 +160,7 @@ pub const fn decode(raw: u16) -> Result<TrolleyId, ReadError> {
     if raw == 0 {
         return Err(ReadError::NoCams);
     }
-    if raw.count_ones() % 2 != 0 {
+    if !raw.count_ones().is_multiple_of(2) {
         return Err(ReadError::Parity { raw });
     }
     match TrolleyId::new(raw & NUMBER_MASK) {
