@@ -6,7 +6,7 @@ use core::fmt;
 
 use crate::alarm::{Alarm, AlarmState};
 use crate::config::{Config, ConfigError, Kind};
-use crate::controller::Pid;
+use crate::controller::{Inputs, Pid};
 use crate::scalar::Scalar;
 use crate::scaling::Scaling;
 
@@ -153,6 +153,9 @@ pub struct Parameters {
     pub setpoint: f64,
     /// RFEL, the largest error before the alarm, in scale units (≥ 0).
     pub rfel: f64,
+    /// Night set-back: subtracted from WIN while the station's night input is on (the
+    /// source's wish for two set-points chosen by a digital input); 0 for none.
+    pub night_setback: f64,
 }
 
 /// An operator's edit that was refused. The shadow set is unchanged.
@@ -225,7 +228,7 @@ impl core::error::Error for EditError {}
 /// ```
 /// use regler_pid::{Code, Config, OperatorLimits, Parameters, Scaling, Staged};
 /// let scaling = Scaling::new(0.0, 200.0)?;
-/// let active = Parameters { config: Config::default(), setpoint: 100.0, rfel: 10.0 };
+/// let active = Parameters { config: Config::default(), setpoint: 100.0, rfel: 10.0, night_setback: 0.0 };
 /// let mut staged = Staged::new(active, scaling, OperatorLimits::default()).unwrap();
 /// staged.edit(Code::Win, 150.0).unwrap();               // * 21 * A 150 A
 /// assert_eq!(staged.active().setpoint, 100.0);          // still running on the old set
@@ -272,6 +275,13 @@ impl Staged {
                 code: Code::Rfel,
                 value: active.rfel,
                 requirement: "a finite value >= 0",
+            });
+        }
+        if !(active.night_setback.is_finite() && active.night_setback >= 0.0) {
+            return Err(EditError::IllegalValue {
+                code: Code::Win,
+                value: active.night_setback,
+                requirement: "a night set-back that is finite and >= 0",
             });
         }
         Ok(staged)
@@ -437,7 +447,7 @@ fn value_of(p: &Parameters, code: Code) -> Option<f64> {
 ///
 /// ```
 /// use regler_pid::{AlarmState, Code, Config, OperatorLimits, Parameters, Scaling, Station};
-/// let params = Parameters { config: Config::default(), setpoint: 20.0, rfel: 2.0 };
+/// let params = Parameters { config: Config::default(), setpoint: 20.0, rfel: 2.0, night_setback: 0.0 };
 /// let mut station = Station::<f32>::new(params, Scaling::new(0.0, 40.0)?, OperatorLimits::default()).unwrap();
 /// let y = station.sample(15.0);               // 5 degrees below: an alarm, and heat
 /// assert!(y > 0.0);
@@ -458,6 +468,8 @@ pub struct Station<T> {
     xin: f64,
     y: f64,
     commits: u32,
+    night: bool,
+    feedforward: f64,
 }
 
 impl<T: Scalar> Station<T> {
@@ -481,6 +493,8 @@ impl<T: Scalar> Station<T> {
             xin: scaling.min(),
             y,
             commits: 0,
+            night: false,
+            feedforward: 0.0,
         })
     }
 
@@ -493,16 +507,50 @@ impl<T: Scalar> Station<T> {
             self.commits = self.commits.saturating_add(1);
         }
         let active = self.staged.active;
+        let setpoint = self.setpoint();
         self.xin = xin;
-        self.y = self
-            .pid
-            .update(T::from_f64(active.setpoint), T::from_f64(xin))
-            .to_f64();
-        let error = active.setpoint - xin;
+        let (r, y) = (T::from_f64(setpoint), T::from_f64(xin));
+        self.y = if self.feedforward == 0.0 {
+            self.pid.update(r, y)
+        } else {
+            let inputs = Inputs { feedforward: T::from_f64(self.feedforward), track: None };
+            self.pid.update_with(r, y, inputs)
+        }
+        .to_f64();
+        let error = setpoint - xin;
         // A NaN measurement is an alarm too: the operator must look.
         self.alarm
             .update(error.is_nan() || error.abs() > active.rfel);
         self.y
+    }
+
+    /// The set-point in force: WIN, less the night set-back while the night input is on.
+    #[must_use]
+    pub fn setpoint(&self) -> f64 {
+        let active = self.staged.active;
+        if self.night {
+            active.setpoint - active.night_setback
+        } else {
+            active.setpoint
+        }
+    }
+
+    /// The night input (a digital input: a time switch, say).
+    pub fn set_night(&mut self, night: bool) {
+        self.night = night;
+    }
+
+    /// Whether the night input is on.
+    #[must_use]
+    pub const fn night(&self) -> bool {
+        self.night
+    }
+
+    /// Feed-forward added to the controller's output from the next sample on, in volts (for
+    /// outdoor compensation: the heat the building loses at the present outdoor temperature).
+    /// A non-finite value is ignored and counts as 0.
+    pub fn set_feedforward(&mut self, volts: f64) {
+        self.feedforward = if volts.is_finite() { volts } else { 0.0 };
     }
 
     /// The operator's acknowledge (key C).
@@ -570,6 +618,7 @@ mod tests {
             config: Config::default(),
             setpoint: 50.0,
             rfel: 5.0,
+            night_setback: 0.0,
         };
         Staged::new(
             active,
@@ -652,6 +701,7 @@ mod tests {
             config: Config::default(),
             setpoint: 50.0,
             rfel: 5.0,
+            night_setback: 0.0,
         };
         let mut st = Station::<f64>::new(
             params,
@@ -680,5 +730,23 @@ mod tests {
         st.staged_mut().edit(Code::Win, 70.0).unwrap();
         st.staged_mut().discard();
         assert!(!st.staged().edited());
+    }
+
+    #[test]
+    fn night_input_lowers_the_setpoint_and_feedforward_adds() {
+        let config = Config { kind: Kind::P, k: 1.0, ymin: -100.0, ymax: 100.0, ..Config::default() };
+        let params = Parameters { config, setpoint: 20.0, rfel: 50.0, night_setback: 4.0 };
+        let mut st = Station::<f64>::new(params, Scaling::new(0.0, 40.0).unwrap(), OperatorLimits::default()).unwrap();
+        assert_eq!(st.sample(18.0), 2.0);
+        st.set_night(true);
+        assert!(st.night());
+        assert_eq!(st.setpoint(), 16.0);
+        assert_eq!(st.sample(18.0), -2.0);
+        st.set_feedforward(1.5);
+        assert_eq!(st.sample(18.0), -0.5);
+        st.set_feedforward(f64::NAN);
+        assert_eq!(st.sample(18.0), -2.0);
+        let bad = Parameters { night_setback: -1.0, ..params };
+        assert!(Staged::new(bad, Scaling::new(0.0, 40.0).unwrap(), OperatorLimits::default()).is_err());
     }
 }
