@@ -2,5 +2,6 @@
 //! `src/bin/` rebuilds one source system on the regler crates; the simulation of its plant
 //! lives here so the integration tests can drive it directly.
 
+pub mod autonomous;
 pub mod mailbag;
 pub mod svg;

@@ -44,6 +44,20 @@ fn nice_ceiling(max: f64) -> f64 {
 /// A line chart with axes, five grid lines and a legend.
 #[must_use]
 pub fn line_chart(title: &str, x_label: &str, y_label: &str, series: &[Series<'_>]) -> String {
+    line_chart_marked(title, x_label, y_label, series, &[], "")
+}
+
+/// A line chart with vertical dashed markers at the x values `markers`, labelled `marker_label`
+/// in the legend.
+#[must_use]
+pub fn line_chart_marked(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series<'_>],
+    markers: &[f64],
+    marker_label: &str,
+) -> String {
     let points = series.iter().flat_map(|s| s.points.iter());
     let x_max = nice_ceiling(points.clone().map(|p| p.0).fold(0.0, f64::max));
     let y_max = nice_ceiling(points.map(|p| p.1).fold(0.0, f64::max));
@@ -88,7 +102,8 @@ pub fn line_chart(title: &str, x_label: &str, y_label: &str, series: &[Series<'_
             s.colour,
             path.join(" ")
         );
-        for &(x, y) in &s.points {
+        // Dots only where they can be told apart.
+        for &(x, y) in s.points.iter().filter(|_| s.points.len() <= 60) {
             let _ = writeln!(
                 svg,
                 r#"<circle cx="{:.1}" cy="{:.1}" r="2.5" fill="{}"/>"#,
@@ -98,6 +113,17 @@ pub fn line_chart(title: &str, x_label: &str, y_label: &str, series: &[Series<'_
             );
         }
         legend(&mut svg, i, s.label, s.colour, s.dashed);
+    }
+    for &m in markers {
+        let _ = writeln!(
+            svg,
+            r##"<line x1="{x:.1}" x2="{x:.1}" y1="{TOP}" y2="{:.1}" stroke="#8e44ad" stroke-dasharray="3 3"/>"##,
+            TOP + ph,
+            x = sx(m)
+        );
+    }
+    if !markers.is_empty() {
+        legend(&mut svg, series.len(), marker_label, "#8e44ad", true);
     }
     svg.push_str("</svg>\n");
     svg

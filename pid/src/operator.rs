@@ -513,7 +513,10 @@ impl<T: Scalar> Station<T> {
         self.y = if self.feedforward == 0.0 {
             self.pid.update(r, y)
         } else {
-            let inputs = Inputs { feedforward: T::from_f64(self.feedforward), track: None };
+            let inputs = Inputs {
+                feedforward: T::from_f64(self.feedforward),
+                track: None,
+            };
             self.pid.update_with(r, y, inputs)
         }
         .to_f64();
@@ -734,9 +737,25 @@ mod tests {
 
     #[test]
     fn night_input_lowers_the_setpoint_and_feedforward_adds() {
-        let config = Config { kind: Kind::P, k: 1.0, ymin: -100.0, ymax: 100.0, ..Config::default() };
-        let params = Parameters { config, setpoint: 20.0, rfel: 50.0, night_setback: 4.0 };
-        let mut st = Station::<f64>::new(params, Scaling::new(0.0, 40.0).unwrap(), OperatorLimits::default()).unwrap();
+        let config = Config {
+            kind: Kind::P,
+            k: 1.0,
+            ymin: -100.0,
+            ymax: 100.0,
+            ..Config::default()
+        };
+        let params = Parameters {
+            config,
+            setpoint: 20.0,
+            rfel: 50.0,
+            night_setback: 4.0,
+        };
+        let mut st = Station::<f64>::new(
+            params,
+            Scaling::new(0.0, 40.0).unwrap(),
+            OperatorLimits::default(),
+        )
+        .unwrap();
         assert_eq!(st.sample(18.0), 2.0);
         st.set_night(true);
         assert!(st.night());
@@ -746,7 +765,17 @@ mod tests {
         assert_eq!(st.sample(18.0), -0.5);
         st.set_feedforward(f64::NAN);
         assert_eq!(st.sample(18.0), -2.0);
-        let bad = Parameters { night_setback: -1.0, ..params };
-        assert!(Staged::new(bad, Scaling::new(0.0, 40.0).unwrap(), OperatorLimits::default()).is_err());
+        let bad = Parameters {
+            night_setback: -1.0,
+            ..params
+        };
+        assert!(
+            Staged::new(
+                bad,
+                Scaling::new(0.0, 40.0).unwrap(),
+                OperatorLimits::default()
+            )
+            .is_err()
+        );
     }
 }

@@ -1,0 +1,623 @@
+//! The 1985 autonomous PID controller (source 002) on a simulated process, run in simulated
+//! time on `regler-pid`'s [`Station`], operated through the source's terminal dialogue or its
+//! keypad and LCD.
+//!
+//! # Processes
+//! - **room**: a room heated by a 0–10 V heater through a first-order lag (time constant
+//!   30 min) with a dead time of 2 min; 10 V holds the room 40 °C above the outdoor temperature,
+//!   which follows a daily sine (mean `outdoor_mean`, ±5 °C) plus seeded weather noise.
+//!   Scale 0–40 °C.
+//! - **tank**: a tank level fed by a 0–10 V pump, first-order, time constant 30 s, no dead time;
+//!   10 V holds 100 % with the outflow valve shut; the valve moves every five minutes
+//!   (a seeded random walk, 0–30 % of the inflow range).
+//!   Scale 0–100 %.
+//!
+//! The measurement goes through the source's 12-bit A/D and the output through its 8-bit D/A.
+//!
+//! # Scripts
+//! One command a line, `TIME KIND ARGUMENTS`; `#` starts a comment. TIME is seconds, or with a
+//! unit `90s`, `15m`, `2h`, or a clock time `hh:mm`. KIND is
+//! - `term TEXT`: a line typed at the terminal (start-up answers, `Y` for the change mode, `C`);
+//!   `term` alone is an empty line (CR);
+//! - `keys KEYS`: keys pressed on the keypad, e.g. `keys * 21 * A 150 A D`;
+//! - `night on|off`: the night input (set-back);
+//! - `outdoor DELTA`: a step in the outdoor temperature (room) or outflow (tank), in scale units.
+
+pub mod keypad;
+pub mod terminal;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use regler_pid::{Config, OperatorLimits, Parameters, Scaling, Station};
+use serde::Serialize;
+
+use self::keypad::{KeyEffect, Keypad};
+use self::terminal::{Startup, Terminal};
+
+/// The simulated process.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ProcessKind {
+    /// A heated room (slow, dead time, outdoor disturbance).
+    Room,
+    /// A tank level (fast).
+    Tank,
+}
+
+impl ProcessKind {
+    /// The measurement scale.
+    #[must_use]
+    pub fn scale(self) -> (f64, f64) {
+        match self {
+            ProcessKind::Room => (0.0, 40.0),
+            ProcessKind::Tank => (0.0, 100.0),
+        }
+    }
+
+    /// Integration step, seconds.
+    fn dt(self) -> f64 {
+        match self {
+            ProcessKind::Room => 1.0,
+            ProcessKind::Tank => 0.1,
+        }
+    }
+}
+
+/// Which operator interface starts the controller.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Interface {
+    /// The terminal: the script's first `term` lines answer the start-up questions.
+    Terminal,
+    /// The keypad only: the source's keypad start-up values (PID, S = 1 s, KP = 10, TI = 8,
+    /// 0–10 V, WIN = SCALEMIN).
+    Keypad,
+}
+
+/// One operator or plant input.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", content = "value", rename_all = "lowercase")]
+pub enum Input {
+    /// A line at the terminal.
+    Term(String),
+    /// Keys on the keypad.
+    Keys(String),
+    /// The night input.
+    Night(bool),
+    /// A disturbance step.
+    Outdoor(f64),
+}
+
+/// A timed input.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Event {
+    /// Seconds from the start.
+    pub t_s: f64,
+    /// The input.
+    pub input: Input,
+}
+
+/// Parses a script (see the module docs). Errors name the line.
+pub fn parse_script(text: &str) -> Result<Vec<Event>, String> {
+    let mut events = Vec::new();
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim_end();
+        if line.trim().is_empty() {
+            continue;
+        }
+        let err = |what: &str| format!("script line {}: {what}: {raw:?}", n + 1);
+        let mut parts = line.trim_start().splitn(3, char::is_whitespace);
+        let time = parts.next().ok_or_else(|| err("missing time"))?;
+        let kind = parts
+            .next()
+            .ok_or_else(|| err("missing command (term, keys, night, outdoor)"))?;
+        let rest = parts.next().unwrap_or("").trim();
+        let t_s =
+            parse_time(time).ok_or_else(|| err("bad time (use 600, 90s, 15m, 2h or hh:mm)"))?;
+        let input = match kind {
+            "term" => Input::Term(rest.to_string()),
+            "keys" => Input::Keys(rest.to_string()),
+            "night" => match rest {
+                "on" => Input::Night(true),
+                "off" => Input::Night(false),
+                _ => return Err(err("night takes on or off")),
+            },
+            "outdoor" => Input::Outdoor(
+                rest.parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| err("outdoor takes a number"))?,
+            ),
+            _ => return Err(err("unknown command (term, keys, night, outdoor)")),
+        };
+        events.push(Event { t_s, input });
+    }
+    events.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+    Ok(events)
+}
+
+fn parse_time(s: &str) -> Option<f64> {
+    let value = if let Some((h, m)) = s.split_once(':') {
+        let (h, m) = (h.parse::<f64>().ok()?, m.parse::<f64>().ok()?);
+        (m < 60.0).then_some(h * 3600.0 + m * 60.0)?
+    } else if let Some(v) = s.strip_suffix('h') {
+        v.parse::<f64>().ok()? * 3600.0
+    } else if let Some(v) = s.strip_suffix('m') {
+        v.parse::<f64>().ok()? * 60.0
+    } else if let Some(v) = s.strip_suffix('s') {
+        v.parse::<f64>().ok()?
+    } else {
+        s.parse::<f64>().ok()?
+    };
+    (value.is_finite() && value >= 0.0).then_some(value)
+}
+
+/// The script used when none is given: a start-up at the terminal, a set-point change on the
+/// keypad, a night set-back, an outdoor cold snap and a retune in the change mode.
+#[must_use]
+pub fn demo_script(process: ProcessKind) -> &'static str {
+    match process {
+        ProcessKind::Room => {
+            "# start-up dialogue at the terminal
+0 term PID
+0 term 10       # S
+0 term 0        # YMIN
+0 term 10       # YMAX
+0 term 0.5      # DYMAX
+0 term 2        # KP
+0 term 900      # TI
+0 term 60       # TD
+0 term 0        # SCALE MIN
+0 term 40       # SCALE MAX
+0 term DIR
+0 term 1.5      # RFEL
+0 term 20       # WIN
+0 term
+# the keypad: WIN 20 -> 22, as the source's example
+4h keys * 21 * A 22 A D
+# an illegal value, then the alarm acknowledged
+5h keys * 51 * A 20000 A
+5h keys D
+6h term C
+# night set-back from 22:00 to 06:00
+22:00 night on
+30:00 night off
+# a cold snap
+36h outdoor -8
+# retune in the change mode: keep TYP and WIN, S 10, KP 3, TI 1200, then quit
+40h term Y
+40h term
+40h term
+40h term
+40h term 3
+40h term 1200
+40h term Q
+"
+        }
+        ProcessKind::Tank => {
+            "0 term PI
+0 term 1        # S
+0 term 0
+0 term 10
+0 term 0        # DYMAX: no limit
+0 term 1.5      # KP
+0 term 40       # TI
+0 term 0
+0 term 100
+0 term DIR
+0 term 5        # RFEL
+0 term 50       # WIN
+0 term
+10m keys * 21 * A 70 A D
+20m outdoor 10
+30m keys * 10 * A P I D A * 61 * A 1 A D
+"
+        }
+    }
+}
+
+/// Simulation parameters (the example's command line).
+#[derive(Clone, Debug, Serialize)]
+pub struct SimConfig {
+    /// The process.
+    pub process: ProcessKind,
+    /// Seed of the disturbances.
+    pub seed: u64,
+    /// Simulated hours.
+    pub hours: f64,
+    /// Which interface starts the controller.
+    pub interface: Interface,
+    /// Night set-back, scale units (0: none).
+    pub night_setback: f64,
+    /// Outdoor compensation: feed-forward of the heat loss (room only).
+    pub outdoor_compensation: bool,
+    /// Mean outdoor temperature, °C (room).
+    pub outdoor_mean: f64,
+    /// The timed inputs.
+    #[serde(skip)]
+    pub script: Vec<Event>,
+}
+
+/// A point of the trace.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct TracePoint {
+    /// Seconds from the start.
+    pub t_s: f64,
+    /// Set-point in force.
+    pub setpoint: f64,
+    /// Measurement.
+    pub measurement: f64,
+    /// Output, volts.
+    pub output: f64,
+}
+
+/// A line the operator saw, with its time.
+#[derive(Clone, Debug, Serialize)]
+pub struct Shown {
+    /// Seconds from the start.
+    pub t_s: f64,
+    /// Terminal line or LCD picture.
+    pub text: String,
+}
+
+/// The results.
+#[derive(Clone, Debug, Serialize)]
+pub struct SimReport {
+    /// The parameters.
+    pub config: SimConfig,
+    /// Integral of |set-point − measurement|, scale units × hours.
+    pub iae_unit_hours: f64,
+    /// Overshoot of the first approach to the set-point, % of the step.
+    pub overshoot_percent: f64,
+    /// Time until the measurement stays within 2 % of the first step (at least 0.2 units),
+    /// seconds; `None` if it never settles.
+    pub settling_time_s: Option<f64>,
+    /// Alarms raised.
+    pub alarms: u32,
+    /// Times (s) at which a commit took effect.
+    pub commits_s: Vec<f64>,
+    /// Samples taken.
+    pub samples: u64,
+    /// Controller faults seen.
+    pub faults: String,
+    /// The trace (every controller sample).
+    pub trace: Vec<TracePoint>,
+    /// What the terminal printed and the LCD showed, in order.
+    pub shown: Vec<Shown>,
+    /// The LCD at the end.
+    pub final_lcd: String,
+}
+
+/// Room heater: degrees above outdoor per volt at steady state.
+const HEATER_GAIN: f64 = 4.0;
+
+struct Plant {
+    kind: ProcessKind,
+    x: f64,
+    delay: std::collections::VecDeque<f64>,
+    disturbance: f64,
+    noise: f64,
+    rng: ChaCha8Rng,
+    outdoor_mean: f64,
+}
+
+impl Plant {
+    fn new(kind: ProcessKind, seed: u64, outdoor_mean: f64) -> Plant {
+        let delay_steps = match kind {
+            ProcessKind::Room => 120,
+            ProcessKind::Tank => 0,
+        };
+        let x = match kind {
+            ProcessKind::Room => 15.0,
+            ProcessKind::Tank => 20.0,
+        };
+        Plant {
+            kind,
+            x,
+            delay: std::iter::repeat_n(0.0, delay_steps).collect(),
+            disturbance: 0.0,
+            noise: 0.0,
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            outdoor_mean,
+        }
+    }
+
+    /// Outdoor temperature (room) at `t`.
+    fn outdoor(&self, t: f64) -> f64 {
+        let day = 2.0 * std::f64::consts::PI * (t / 86_400.0 - 0.625);
+        self.outdoor_mean + 5.0 * day.sin() + self.disturbance + self.noise
+    }
+
+    fn step(&mut self, t: f64, u: f64) {
+        let dt = self.kind.dt();
+        self.delay.push_back(u);
+        let applied = self.delay.pop_front().unwrap_or(u);
+        match self.kind {
+            ProcessKind::Room => {
+                // Weather noise: a slow random walk, pulled back toward zero.
+                self.noise += dt * (-self.noise / 7200.0) + 0.01 * (self.rng.random::<f64>() - 0.5);
+                let target = self.outdoor(t) + HEATER_GAIN * applied;
+                self.x += dt * (target - self.x) / 1800.0;
+            }
+            ProcessKind::Tank => {
+                // The outflow valve moves every five minutes, within its range.
+                if (t / 300.0).fract() < dt / 300.0 {
+                    self.noise = (self.noise + self.rng.random_range(-2.0..2.0)).clamp(0.0, 30.0);
+                }
+                let target = 10.0 * applied - self.disturbance - self.noise;
+                self.x += dt * (target - self.x) / 30.0;
+                self.x = self.x.clamp(0.0, 100.0);
+            }
+        }
+    }
+}
+
+/// Runs the simulation. `progress(fraction)` is called now and then.
+pub fn run(config: &SimConfig, mut progress: impl FnMut(f64)) -> Result<SimReport, String> {
+    if !(config.hours.is_finite() && config.hours > 0.0 && config.hours <= 24.0 * 365.0) {
+        return Err(format!(
+            "hours must be between 0 and 8760, got {}",
+            config.hours
+        ));
+    }
+    if !(config.night_setback.is_finite() && config.night_setback >= 0.0) {
+        return Err(format!(
+            "night-setback must be >= 0, got {}",
+            config.night_setback
+        ));
+    }
+    if !config.outdoor_mean.is_finite() {
+        return Err("outdoor-mean must be a finite number".into());
+    }
+    let mut shown: Vec<Shown> = Vec::new();
+    let mut events = config.script.iter().peekable();
+    let (scale_min, scale_max) = config.process.scale();
+    let mut terminal = Terminal::new();
+    let startup = match config.interface {
+        Interface::Keypad => {
+            let scaling = Scaling::new(scale_min, scale_max).map_err(|e| e.to_string())?;
+            let params = Parameters {
+                config: Config::default(),
+                setpoint: scale_min,
+                rfel: 0.1 * (scale_max - scale_min),
+                night_setback: 0.0,
+            };
+            Startup { params, scaling }
+        }
+        Interface::Terminal => {
+            for line in Terminal::banner() {
+                shown.push(Shown {
+                    t_s: 0.0,
+                    text: line,
+                });
+            }
+            let mut done = None;
+            while done.is_none() {
+                let Some(event) = events.next_if(|e| matches!(e.input, Input::Term(_))) else {
+                    return Err(
+                        "the start-up dialogue is not finished: the script must answer every \
+                                question with `term` lines before any other command"
+                            .into(),
+                    );
+                };
+                let Input::Term(line) = &event.input else {
+                    continue;
+                };
+                shown.push(Shown {
+                    t_s: event.t_s,
+                    text: format!("> {line}"),
+                });
+                let (out, result) = terminal.startup_line(line);
+                shown.extend(out.into_iter().map(|text| Shown {
+                    t_s: event.t_s,
+                    text,
+                }));
+                done = result;
+            }
+            done.ok_or("start-up did not finish")?
+        }
+    };
+    let mut params = startup.params;
+    params.night_setback = config.night_setback;
+    let scaling = startup.scaling;
+    let mut station = Station::<f32>::new(params, scaling, OperatorLimits::default())
+        .map_err(|e| e.to_string())?;
+    let mut keypad = Keypad::new();
+    let mut plant = Plant::new(config.process, config.seed, config.outdoor_mean);
+
+    let dt = config.process.dt();
+    let end = config.hours * 3600.0;
+    let steps = (end / dt).round() as u64;
+    let mut next_sample = 0.0;
+    let mut u = 0.0;
+    let mut trace = Vec::new();
+    let mut commits = Vec::new();
+    let mut samples = 0u64;
+    let mut iae = 0.0;
+    for step in 0..=steps {
+        let t = step as f64 * dt;
+        while let Some(event) = events.next_if(|e| e.t_s <= t) {
+            apply(
+                event,
+                &mut station,
+                &mut terminal,
+                &mut keypad,
+                &mut plant,
+                &mut shown,
+            );
+        }
+        if t + 1e-9 >= next_sample {
+            let before = station.commits();
+            if config.outdoor_compensation && config.process == ProcessKind::Room {
+                // Heat the building loses now, in heater volts: (set-point − outdoor) / gain.
+                station.set_feedforward((station.setpoint() - plant.outdoor(t)) / HEATER_GAIN);
+            }
+            let measured = scaling
+                .count_to_units(scaling.units_to_count(plant.x))
+                .unwrap_or(plant.x);
+            let y = station.sample(measured);
+            u = Scaling::volts_to_dac(y)
+                .map(Scaling::dac_to_volts)
+                .unwrap_or(0.0);
+            if station.commits() > before {
+                commits.push(t);
+            }
+            let h = station.staged().active().config.h;
+            next_sample += h;
+            samples += 1;
+            trace.push(TracePoint {
+                t_s: t,
+                setpoint: station.setpoint(),
+                measurement: measured,
+                output: u,
+            });
+            keypad.show_status(&station);
+        }
+        iae += (station.setpoint() - plant.x).abs() * dt;
+        plant.step(t, u);
+        if step % 100_000 == 0 {
+            progress(step as f64 / steps.max(1) as f64);
+        }
+    }
+    for event in events {
+        shown.push(Shown {
+            t_s: event.t_s,
+            text: format!("(not reached: {:?} after the end of the run)", event.input),
+        });
+    }
+    progress(1.0);
+
+    let (overshoot, settling) = first_step_metrics(&trace);
+    Ok(SimReport {
+        config: config.clone(),
+        iae_unit_hours: iae / 3600.0,
+        overshoot_percent: overshoot,
+        settling_time_s: settling,
+        alarms: station.alarm().raised(),
+        commits_s: commits,
+        samples,
+        faults: station.pid().faults().to_string(),
+        trace,
+        shown,
+        final_lcd: keypad.lcd().render(),
+    })
+}
+
+fn apply(
+    event: &Event,
+    station: &mut Station<f32>,
+    terminal: &mut Terminal,
+    keypad: &mut Keypad,
+    plant: &mut Plant,
+    shown: &mut Vec<Shown>,
+) {
+    let t_s = event.t_s;
+    match &event.input {
+        Input::Term(line) => {
+            shown.push(Shown {
+                t_s,
+                text: format!("> {line}"),
+            });
+            for text in terminal.running_line(line, station) {
+                shown.push(Shown { t_s, text });
+            }
+        }
+        Input::Keys(sequence) => {
+            let mut messages = Vec::new();
+            for key in keypad::keys(sequence) {
+                if let KeyEffect::Message(m) = keypad.press(key, station) {
+                    messages.push(m);
+                }
+            }
+            shown.push(Shown {
+                t_s,
+                text: format!("keys: {sequence}\n{}", keypad.lcd().render()),
+            });
+            let _ = messages;
+        }
+        Input::Night(on) => {
+            station.set_night(*on);
+            shown.push(Shown {
+                t_s,
+                text: format!("night input {}", if *on { "on" } else { "off" }),
+            });
+        }
+        Input::Outdoor(delta) => {
+            plant.disturbance += delta;
+            shown.push(Shown {
+                t_s,
+                text: format!("disturbance step {delta:+}"),
+            });
+        }
+    }
+}
+
+/// Overshoot (%) and settling time (s) of the first approach to the set-point: from the start
+/// until the set-point first changes.
+fn first_step_metrics(trace: &[TracePoint]) -> (f64, Option<f64>) {
+    let Some(first) = trace.first() else {
+        return (0.0, None);
+    };
+    let r = first.setpoint;
+    let step = r - first.measurement;
+    let span: Vec<&TracePoint> = trace
+        .iter()
+        .take_while(|p| (p.setpoint - r).abs() < 1e-9)
+        .collect();
+    if step.abs() < 1e-9 {
+        return (0.0, Some(0.0));
+    }
+    let overshoot = span
+        .iter()
+        .map(|p| (p.measurement - r) * step.signum())
+        .fold(0.0, f64::max);
+    let band = (0.02 * step.abs()).max(0.2);
+    let last_out = span.iter().rposition(|p| (p.measurement - r).abs() > band);
+    let settling = match last_out {
+        None => Some(0.0),
+        Some(i) if i + 1 < span.len() => span.get(i + 1).map(|p| p.t_s),
+        Some(_) => None,
+    };
+    (100.0 * overshoot / step.abs(), settling)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn script_times_and_errors() {
+        let events =
+            parse_script("# c\n90s term PI\n2h keys * 21 *\n22:30 night on\n10m outdoor -3\n")
+                .unwrap();
+        let times: Vec<f64> = events.iter().map(|e| e.t_s).collect();
+        assert_eq!(times, [90.0, 600.0, 7200.0, 81_000.0]);
+        assert!(parse_script("x term").unwrap_err().contains("line 1"));
+        assert!(
+            parse_script("0 dance")
+                .unwrap_err()
+                .contains("unknown command")
+        );
+        assert!(parse_script("0 night maybe").is_err());
+        assert!(parse_script("10:75 night on").is_err());
+    }
+
+    #[test]
+    fn unfinished_startup_is_an_error() {
+        let config = SimConfig {
+            process: ProcessKind::Room,
+            seed: 1,
+            hours: 1.0,
+            interface: Interface::Terminal,
+            night_setback: 0.0,
+            outdoor_compensation: false,
+            outdoor_mean: 0.0,
+            script: parse_script("0 term PID\n0 keys *").unwrap(),
+        };
+        assert!(
+            run(&config, |_| {})
+                .unwrap_err()
+                .contains("start-up dialogue is not finished")
+        );
+    }
+}

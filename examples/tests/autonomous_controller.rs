@@ -1,0 +1,203 @@
+//! End-to-end: the `autonomous-controller` binary, driven by scripts and by stdin.
+
+use std::io::Write;
+use std::process::{Command, Stdio};
+
+use serde_json::Value;
+
+fn controller(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_autonomous-controller"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn temp_file(name: &str, text: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("regler-ac-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn json(args: &[&str]) -> Value {
+    let out = controller(&[args, &["--json", "--no-svg"]].concat());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn demonstration_controls_the_room_and_reports() {
+    let r = json(&["--hours", "48"]);
+    assert_eq!(r["faults"], "no fault");
+    assert_eq!(r["commits_s"].as_array().unwrap().len(), 3);
+    assert!(r["alarms"].as_u64().unwrap() >= 1);
+    let settling = r["settling_time_s"].as_f64().expect("settles");
+    assert!(settling > 0.0 && settling < 3.0 * 3600.0, "{settling}");
+    assert!(r["overshoot_percent"].as_f64().unwrap() < 20.0);
+    let iae = r["iae_unit_hours"].as_f64().unwrap();
+    assert!(iae.is_finite() && iae < 20.0, "{iae}");
+    // The keypad change at 4 h moved the set-point from 20 to 22 at the next sample.
+    let trace = r["trace"].as_array().unwrap();
+    let at = |h: f64| {
+        trace
+            .iter()
+            .find(|p| p["t_s"].as_f64().unwrap() >= h * 3600.0)
+            .unwrap()["setpoint"]
+            .as_f64()
+            .unwrap()
+    };
+    assert_eq!(at(3.9), 20.0);
+    assert_eq!(at(4.01), 22.0);
+    assert_eq!(
+        at(23.0),
+        19.0,
+        "night set-back of 3 between 22:00 and 06:00"
+    );
+    // Output always within YMIN..YMAX.
+    assert!(
+        trace
+            .iter()
+            .all(|p| (0.0..=10.0).contains(&p["output"].as_f64().unwrap()))
+    );
+}
+
+#[test]
+fn same_seed_same_run() {
+    assert_eq!(
+        json(&["--hours", "6", "--seed", "4"]),
+        json(&["--hours", "6", "--seed", "4"])
+    );
+}
+
+#[test]
+fn keypad_messages_and_a_tank_script() {
+    let script = temp_file(
+        "tank.txt",
+        "0 keys * 42 *            # WRONG CODE
+0 keys 91 * A             # WRONG COMMAND (Y is read only)
+0 keys 21 * A 150 A       # ILLEGAL VALUE (above SCALEMAX 100)
+0 keys 51 * A 1.5 A 71 * A 30 A 21 * A 60 A D
+10m keys * 21 * A 40 A D
+",
+    );
+    let r = json(&[
+        "--process",
+        "tank",
+        "--interface",
+        "keypad",
+        "--hours",
+        "0.5",
+        "--script",
+        script.to_str().unwrap(),
+    ]);
+    let shown: Vec<&str> = r["shown"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["text"].as_str().unwrap())
+        .collect();
+    for message in ["WRONG CODE", "WRONG COMMAND", "ILLEGAL VALUE"] {
+        assert!(
+            shown.iter().any(|s| s.contains(message)),
+            "{message} not shown: {shown:?}"
+        );
+    }
+    let trace = r["trace"].as_array().unwrap();
+    let last = trace.last().unwrap();
+    assert_eq!(last["setpoint"], 40.0);
+    assert!(
+        (last["measurement"].as_f64().unwrap() - 40.0).abs() < 3.0,
+        "{last}"
+    );
+}
+
+#[test]
+fn interactive_terminal_on_stdin() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_autonomous-controller"))
+        .args([
+            "--interactive",
+            "--process",
+            "tank",
+            "--hours",
+            "1",
+            "--no-svg",
+            "-q",
+            "--step-s",
+            "300",
+        ])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let answers =
+        "PI\n1\n0\n10\n0\n1.5\n30\n0\n100\nDIR\n5\n50\n\n\nY\n\n70\nQ\nC\nrun 600\nquit\n";
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(answers.as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("commits            1"), "{text}");
+}
+
+#[test]
+fn svg_and_human_output() {
+    let svg = std::env::temp_dir().join(format!("regler-ac-{}.svg", std::process::id()));
+    let out = controller(&["--hours", "8", "--svg", svg.to_str().unwrap()]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("REGULATOR TYPE (P,I,D,PI,PD,ID,PID) ?>"));
+    assert!(text.contains("ILLEGAL VALUE"));
+    assert!(text.contains("IAE"));
+    let picture = std::fs::read_to_string(&svg).unwrap();
+    assert!(picture.contains("commit") && picture.trim_end().ends_with("</svg>"));
+    std::fs::remove_file(&svg).unwrap();
+}
+
+#[test]
+fn bad_input_is_a_clear_message() {
+    let bad_script = temp_file("bad.txt", "0 term PID\nsoon keys *\n");
+    for (args, needle) in [
+        (vec!["--hours", "0"], "hours"),
+        (vec!["--hours", "-3"], "hours"),
+        (vec!["--night-setback", "-1"], "night-setback"),
+        (vec!["--script", "/nonexistent/script.txt"], "cannot read"),
+        (vec!["--script", bad_script.to_str().unwrap()], "line 2"),
+        (vec!["--process", "reactor"], "invalid value"),
+    ] {
+        let out = controller(&[args.as_slice(), &["--no-svg", "-q"]].concat());
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!err.contains("panicked"));
+    }
+}
+
+#[test]
+fn help() {
+    let out = controller(&["--help"]);
+    let help = String::from_utf8(out.stdout).unwrap();
+    for option in [
+        "--script",
+        "--interactive",
+        "--seed",
+        "--json",
+        "--svg",
+        "--outdoor-compensation",
+    ] {
+        assert!(help.contains(option), "{option}");
+    }
+}
