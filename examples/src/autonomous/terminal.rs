@@ -2,7 +2,8 @@
 //! and messages, the live status line, the change mode, and alarm acknowledge with C.
 //!
 //! The dialogue is a line-by-line state machine: every line the operator types goes to
-//! [`Terminal::line`], which returns what the terminal prints.
+//! [`Terminal::startup_line`] and then [`Terminal::running_line`], which return
+//! what the terminal prints.
 
 use regler_pid::{
     Action, Code, Config, EditError, Kind, OperatorLimits, Parameters, Scalar, Scaling, Station,
