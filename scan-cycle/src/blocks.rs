@@ -1,0 +1,712 @@
+//! IEC 61131-3 standard function blocks: timers, counters, edge detectors and bistables.
+//!
+//! Time is a wrapping `u32` millisecond count passed in by the caller. The timers accumulate the
+//! time between calls (wrapping difference), so they work across the wrap of the counter as long
+//! as two calls are less than 2³² ms (49.7 days) apart; elapsed time saturates at `u32::MAX`.
+
+/// Accumulated time since a timer started, robust to the wrap of the clock.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+struct Elapsed {
+    last_ms: u32,
+    total_ms: u32,
+}
+
+impl Elapsed {
+    fn start(now_ms: u32) -> Elapsed {
+        Elapsed {
+            last_ms: now_ms,
+            total_ms: 0,
+        }
+    }
+
+    fn advance(&mut self, now_ms: u32) -> u32 {
+        self.total_ms = self
+            .total_ms
+            .saturating_add(now_ms.wrapping_sub(self.last_ms));
+        self.last_ms = now_ms;
+        self.total_ms
+    }
+}
+
+/// TON, on-delay timer: Q goes on when IN has been on for PT; ET counts while IN is on.
+///
+/// ```
+/// use regler_scan_cycle::Ton;
+/// let mut jam = Ton::new(500);
+/// assert!(!jam.call(true, 1_000));
+/// assert!(!jam.call(true, 1_499));
+/// assert!(jam.call(true, 1_500));
+/// assert_eq!(jam.et(), 500);
+/// assert!(!jam.call(false, 1_600)); // IN off: Q off, ET 0
+/// assert_eq!(jam.et(), 0);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Ton {
+    pt_ms: u32,
+    running: Option<Elapsed>,
+    q: bool,
+}
+
+impl Ton {
+    /// A timer with preset time `pt_ms`.
+    #[must_use]
+    pub const fn new(pt_ms: u32) -> Ton {
+        Ton {
+            pt_ms,
+            running: None,
+            q: false,
+        }
+    }
+
+    /// One call: input IN at time `now_ms`; returns Q.
+    pub fn call(&mut self, input: bool, now_ms: u32) -> bool {
+        if !input {
+            self.running = None;
+            self.q = false;
+            return false;
+        }
+        let running = self.running.get_or_insert(Elapsed::start(now_ms));
+        let elapsed = running.advance(now_ms);
+        self.q = elapsed >= self.pt_ms;
+        self.q
+    }
+
+    /// Elapsed time ET, saturating at PT.
+    #[must_use]
+    pub fn et(&self) -> u32 {
+        self.running.map_or(0, |r| r.total_ms.min(self.pt_ms))
+    }
+
+    /// Q as of the last call.
+    #[must_use]
+    pub const fn q(&self) -> bool {
+        self.q
+    }
+
+    /// The preset time PT.
+    #[must_use]
+    pub const fn pt(&self) -> u32 {
+        self.pt_ms
+    }
+
+    /// Changes PT; takes effect at the next call (a running timer compares its elapsed time
+    /// with the new PT).
+    pub fn set_pt(&mut self, pt_ms: u32) {
+        self.pt_ms = pt_ms;
+    }
+}
+
+/// TOF, off-delay timer: Q is on while IN is on and for PT after IN goes off.
+///
+/// ```
+/// use regler_scan_cycle::Tof;
+/// let mut run_on = Tof::new(300);
+/// assert!(run_on.call(true, 0));
+/// assert!(run_on.call(false, 100));  // off-delay running
+/// assert!(run_on.call(false, 399));
+/// assert!(!run_on.call(false, 400));
+/// assert_eq!(run_on.et(), 300);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Tof {
+    pt_ms: u32,
+    running: Option<Elapsed>,
+    q: bool,
+}
+
+impl Tof {
+    /// A timer with preset time `pt_ms`.
+    #[must_use]
+    pub const fn new(pt_ms: u32) -> Tof {
+        Tof {
+            pt_ms,
+            running: None,
+            q: false,
+        }
+    }
+
+    /// One call: input IN at time `now_ms`; returns Q.
+    pub fn call(&mut self, input: bool, now_ms: u32) -> bool {
+        if input {
+            self.running = None;
+            self.q = true;
+            return true;
+        }
+        if self.q || self.running.is_some() {
+            let running = self.running.get_or_insert(Elapsed::start(now_ms));
+            self.q = running.advance(now_ms) < self.pt_ms;
+        }
+        self.q
+    }
+
+    /// Elapsed time ET since IN went off, saturating at PT (0 while IN is on).
+    #[must_use]
+    pub fn et(&self) -> u32 {
+        self.running.map_or(0, |r| r.total_ms.min(self.pt_ms))
+    }
+
+    /// Q as of the last call.
+    #[must_use]
+    pub const fn q(&self) -> bool {
+        self.q
+    }
+
+    /// Changes PT.
+    pub fn set_pt(&mut self, pt_ms: u32) {
+        self.pt_ms = pt_ms;
+    }
+}
+
+/// TP, pulse timer: a rising edge of IN starts a pulse of exactly PT; edges during the pulse
+/// are ignored. After the pulse ET holds at PT while IN stays on and returns to 0 when IN is off.
+///
+/// ```
+/// use regler_scan_cycle::Tp;
+/// let mut gate = Tp::new(200);
+/// assert!(gate.call(true, 0));
+/// assert!(gate.call(false, 150)); // the pulse runs on
+/// assert!(!gate.call(false, 200));
+/// assert_eq!(gate.et(), 0);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Tp {
+    pt_ms: u32,
+    running: Option<Elapsed>,
+    q: bool,
+    prev_in: bool,
+}
+
+impl Tp {
+    /// A timer with pulse length `pt_ms`.
+    #[must_use]
+    pub const fn new(pt_ms: u32) -> Tp {
+        Tp {
+            pt_ms,
+            running: None,
+            q: false,
+            prev_in: false,
+        }
+    }
+
+    /// One call: input IN at time `now_ms`; returns Q.
+    pub fn call(&mut self, input: bool, now_ms: u32) -> bool {
+        let rising = input && !self.prev_in;
+        self.prev_in = input;
+        if rising && !self.q && self.running.is_none_or(|r| r.total_ms >= self.pt_ms) {
+            self.running = Some(Elapsed::start(now_ms));
+        }
+        if let Some(running) = &mut self.running {
+            let elapsed = running.advance(now_ms);
+            self.q = elapsed < self.pt_ms;
+            if !self.q && !input {
+                self.running = None;
+            }
+        } else {
+            self.q = false;
+        }
+        self.q
+    }
+
+    /// Elapsed time ET of the pulse, saturating at PT.
+    #[must_use]
+    pub fn et(&self) -> u32 {
+        self.running.map_or(0, |r| r.total_ms.min(self.pt_ms))
+    }
+
+    /// Q as of the last call.
+    #[must_use]
+    pub const fn q(&self) -> bool {
+        self.q
+    }
+
+    /// Changes PT.
+    pub fn set_pt(&mut self, pt_ms: u32) {
+        self.pt_ms = pt_ms;
+    }
+}
+
+/// R_TRIG: Q is on for the one call in which CLK goes from off to on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct RTrig {
+    m: bool,
+}
+
+impl RTrig {
+    /// A detector that has seen CLK off.
+    #[must_use]
+    pub const fn new() -> RTrig {
+        RTrig { m: false }
+    }
+
+    /// One call; returns Q.
+    pub fn call(&mut self, clk: bool) -> bool {
+        let q = clk && !self.m;
+        self.m = clk;
+        q
+    }
+}
+
+/// F_TRIG: Q is on for the one call in which CLK goes from on to off. As in the standard, the
+/// detector starts as if CLK had been off, so it does not fire on its first call.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct FTrig {
+    m: bool,
+}
+
+impl Default for FTrig {
+    fn default() -> FTrig {
+        FTrig::new()
+    }
+}
+
+impl FTrig {
+    /// A detector that has seen CLK off.
+    #[must_use]
+    pub const fn new() -> FTrig {
+        FTrig { m: true }
+    }
+
+    /// One call; returns Q.
+    pub fn call(&mut self, clk: bool) -> bool {
+        let q = !clk && !self.m;
+        self.m = !clk;
+        q
+    }
+}
+
+/// CTU, up-counter: CV counts rising edges of CU up to `i32::MAX`; R resets it; Q = CV ≥ PV.
+///
+/// ```
+/// use regler_scan_cycle::Ctu;
+/// let mut parts = Ctu::new(3);
+/// for cu in [true, false, true, false, true] {
+///     parts.call(cu, false);
+/// }
+/// assert_eq!(parts.cv(), 3);
+/// assert!(parts.call(true, false)); // CU still on: no new edge, Q on
+/// assert!(!parts.call(false, true)); // reset
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Ctu {
+    pv: i32,
+    cv: i32,
+    cu: RTrig,
+}
+
+impl Ctu {
+    /// A counter at 0 with preset PV.
+    #[must_use]
+    pub const fn new(pv: i32) -> Ctu {
+        Ctu {
+            pv,
+            cv: 0,
+            cu: RTrig::new(),
+        }
+    }
+
+    /// One call; returns Q.
+    pub fn call(&mut self, cu: bool, reset: bool) -> bool {
+        let edge = self.cu.call(cu);
+        if reset {
+            self.cv = 0;
+        } else if edge {
+            self.cv = self.cv.saturating_add(1);
+        }
+        self.q()
+    }
+
+    /// Current value CV.
+    #[must_use]
+    pub const fn cv(&self) -> i32 {
+        self.cv
+    }
+
+    /// Q = CV ≥ PV.
+    #[must_use]
+    pub const fn q(&self) -> bool {
+        self.cv >= self.pv
+    }
+
+    /// Changes PV.
+    pub fn set_pv(&mut self, pv: i32) {
+        self.pv = pv;
+    }
+}
+
+/// CTD, down-counter: CV counts rising edges of CD down to `i32::MIN`; LD loads PV; Q = CV ≤ 0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Ctd {
+    pv: i32,
+    cv: i32,
+    cd: RTrig,
+}
+
+impl Ctd {
+    /// A counter at 0 with preset PV (load it with LD before counting down).
+    #[must_use]
+    pub const fn new(pv: i32) -> Ctd {
+        Ctd {
+            pv,
+            cv: 0,
+            cd: RTrig::new(),
+        }
+    }
+
+    /// One call; returns Q.
+    pub fn call(&mut self, cd: bool, load: bool) -> bool {
+        let edge = self.cd.call(cd);
+        if load {
+            self.cv = self.pv;
+        } else if edge {
+            self.cv = self.cv.saturating_sub(1);
+        }
+        self.cv <= 0
+    }
+
+    /// Current value CV.
+    #[must_use]
+    pub const fn cv(&self) -> i32 {
+        self.cv
+    }
+
+    /// Changes PV.
+    pub fn set_pv(&mut self, pv: i32) {
+        self.pv = pv;
+    }
+}
+
+/// CTUD, up-down counter: rising CU counts up, rising CD down (both at once: no change);
+/// R resets (and wins over LD), LD loads PV. Returns (QU = CV ≥ PV, QD = CV ≤ 0).
+///
+/// ```
+/// use regler_scan_cycle::Ctud;
+/// let mut buffer = Ctud::new(2);
+/// buffer.call(true, false, false, false);
+/// buffer.call(false, false, false, false);
+/// assert_eq!(buffer.call(true, false, false, false), (true, false));
+/// assert_eq!(buffer.call(false, true, false, false), (false, false));
+/// assert_eq!(buffer.cv(), 1);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Ctud {
+    pv: i32,
+    cv: i32,
+    cu: RTrig,
+    cd: RTrig,
+}
+
+impl Ctud {
+    /// A counter at 0 with preset PV.
+    #[must_use]
+    pub const fn new(pv: i32) -> Ctud {
+        Ctud {
+            pv,
+            cv: 0,
+            cu: RTrig::new(),
+            cd: RTrig::new(),
+        }
+    }
+
+    /// One call; returns (QU, QD).
+    pub fn call(&mut self, cu: bool, cd: bool, reset: bool, load: bool) -> (bool, bool) {
+        let (up, down) = (self.cu.call(cu), self.cd.call(cd));
+        if reset {
+            self.cv = 0;
+        } else if load {
+            self.cv = self.pv;
+        } else if up && !down {
+            self.cv = self.cv.saturating_add(1);
+        } else if down && !up {
+            self.cv = self.cv.saturating_sub(1);
+        }
+        (self.cv >= self.pv, self.cv <= 0)
+    }
+
+    /// Current value CV.
+    #[must_use]
+    pub const fn cv(&self) -> i32 {
+        self.cv
+    }
+
+    /// Changes PV.
+    pub fn set_pv(&mut self, pv: i32) {
+        self.pv = pv;
+    }
+}
+
+/// SR, set-dominant bistable: Q1 = S1 OR (NOT R AND Q1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Sr {
+    q1: bool,
+}
+
+impl Sr {
+    /// Off.
+    #[must_use]
+    pub const fn new() -> Sr {
+        Sr { q1: false }
+    }
+
+    /// One call; returns Q1.
+    pub fn call(&mut self, set: bool, reset: bool) -> bool {
+        self.q1 = set || (!reset && self.q1);
+        self.q1
+    }
+}
+
+/// RS, reset-dominant bistable: Q1 = NOT R1 AND (S OR Q1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Rs {
+    q1: bool,
+}
+
+impl Rs {
+    /// Off.
+    #[must_use]
+    pub const fn new() -> Rs {
+        Rs { q1: false }
+    }
+
+    /// One call; returns Q1.
+    pub fn call(&mut self, set: bool, reset: bool) -> bool {
+        self.q1 = !reset && (set || self.q1);
+        self.q1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Runs a timer over (time, IN) samples and returns (Q, ET) at each.
+    fn trace(
+        mut call: impl FnMut(bool, u32) -> (bool, u32),
+        samples: &[(u32, bool)],
+    ) -> Vec<(bool, u32)> {
+        samples.iter().map(|&(t, i)| call(i, t)).collect()
+    }
+
+    #[test]
+    fn ton_timing_diagram() {
+        let mut t = Ton::new(100);
+        let got = trace(
+            |i, n| (t.call(i, n), t.et()),
+            &[
+                (0, false),
+                (10, true),
+                (60, true),
+                (110, true),
+                (150, true),
+                (160, false),
+                (170, true),
+                (200, false),
+            ],
+        );
+        assert_eq!(
+            got,
+            [
+                (false, 0),
+                (false, 0),
+                (false, 50),
+                (true, 100),
+                (true, 100),
+                (false, 0),
+                (false, 0),
+                (false, 0)
+            ]
+        );
+    }
+
+    #[test]
+    fn ton_pt_zero_and_pt_change_while_running() {
+        let mut t = Ton::new(0);
+        assert!(t.call(true, 5));
+        let mut t = Ton::new(100);
+        t.call(true, 0);
+        t.call(true, 60);
+        t.set_pt(50); // already past the new PT
+        assert!(t.call(true, 61));
+        assert_eq!(t.et(), 50);
+        t.set_pt(200); // longer again: counts on from the real elapsed time
+        assert!(!t.call(true, 150));
+        assert_eq!(t.et(), 150);
+        assert!(t.call(true, 200));
+    }
+
+    #[test]
+    fn tof_timing_diagram() {
+        let mut t = Tof::new(100);
+        let got = trace(
+            |i, n| (t.call(i, n), t.et()),
+            &[
+                (0, false),
+                (10, true),
+                (20, false),
+                (70, false),
+                (80, true),
+                (90, false),
+                (189, false),
+                (190, false),
+                (300, false),
+            ],
+        );
+        assert_eq!(
+            got,
+            [
+                (false, 0),
+                (true, 0),
+                (true, 0),
+                (true, 50),
+                (true, 0),
+                (true, 0),
+                (true, 99),
+                (false, 100),
+                (false, 100)
+            ]
+        );
+        let mut z = Tof::new(0);
+        assert!(z.call(true, 0));
+        assert!(!z.call(false, 0));
+    }
+
+    #[test]
+    fn tp_timing_diagram() {
+        let mut t = Tp::new(100);
+        let got = trace(
+            |i, n| (t.call(i, n), t.et()),
+            &[
+                (0, true),
+                (20, false),
+                (50, true),
+                (99, true),
+                (100, true),
+                (120, true),
+                (130, false),
+                (140, true),
+                (250, false),
+            ],
+        );
+        assert_eq!(
+            got,
+            [
+                (true, 0),
+                (true, 20),
+                (true, 50),
+                (true, 99),
+                (false, 100),
+                (false, 100),
+                (false, 0),
+                (true, 0),
+                (false, 0)
+            ]
+        );
+        let mut z = Tp::new(0);
+        assert!(!z.call(true, 0));
+        assert_eq!(z.et(), 0);
+    }
+
+    #[test]
+    fn timers_work_across_the_clock_wrap() {
+        let start = u32::MAX - 30;
+        let mut on = Ton::new(100);
+        assert!(!on.call(true, start));
+        assert!(!on.call(true, start.wrapping_add(99)));
+        assert!(on.call(true, start.wrapping_add(100)));
+        let mut off = Tof::new(50);
+        off.call(true, start);
+        off.call(false, start.wrapping_add(10));
+        assert!(off.call(false, start.wrapping_add(59)));
+        assert!(!off.call(false, start.wrapping_add(60)));
+        let mut p = Tp::new(40);
+        assert!(p.call(true, start));
+        assert!(p.call(true, start.wrapping_add(39)));
+        assert!(!p.call(true, start.wrapping_add(40)));
+    }
+
+    #[test]
+    fn counters_follow_the_standard() {
+        let mut up = Ctu::new(2);
+        assert!(!up.call(true, false));
+        assert!(!up.call(true, false)); // held: one edge only
+        up.call(false, false);
+        assert!(up.call(true, false));
+        assert!(!up.call(true, true)); // reset wins
+        assert_eq!(up.cv(), 0);
+
+        let mut down = Ctd::new(2);
+        assert!(down.call(false, false)); // CV 0 <= 0
+        assert!(!down.call(false, true)); // loaded with 2
+        assert!(!down.call(true, false));
+        down.call(false, false);
+        assert!(down.call(true, false));
+        assert_eq!(down.cv(), 0);
+
+        let mut ud = Ctud::new(1);
+        assert_eq!(ud.call(true, true, false, false), (false, true)); // both edges: no change
+        assert_eq!(ud.call(false, false, false, true), (true, false)); // load
+        assert_eq!(ud.call(false, false, true, true), (false, true)); // reset wins over load
+    }
+
+    #[test]
+    fn counters_saturate() {
+        let mut up = Ctu::new(0);
+        up.cv = i32::MAX;
+        up.call(true, false);
+        assert_eq!(up.cv(), i32::MAX);
+        let mut down = Ctd::new(0);
+        down.cv = i32::MIN;
+        down.call(true, false);
+        assert_eq!(down.cv(), i32::MIN);
+    }
+
+    #[test]
+    fn edges_and_bistables() {
+        let mut r = RTrig::new();
+        assert_eq!(
+            [
+                r.call(false),
+                r.call(true),
+                r.call(true),
+                r.call(false),
+                r.call(true)
+            ],
+            [false, true, false, false, true]
+        );
+        let mut f = FTrig::new();
+        assert_eq!(
+            [f.call(false), f.call(true), f.call(false), f.call(false)],
+            [false, false, true, false]
+        );
+        let mut sr = Sr::new();
+        assert!(sr.call(true, true)); // set dominant
+        assert!(sr.call(false, false));
+        assert!(!sr.call(false, true));
+        let mut rs = Rs::new();
+        assert!(!rs.call(true, true)); // reset dominant
+        assert!(rs.call(true, false));
+        assert!(rs.call(false, false));
+        assert!(!rs.call(false, true));
+    }
+}

@@ -1,0 +1,708 @@
+//! The cyclic executive: read all inputs, run the program on the images, write all outputs,
+//! swap the output images; watchdog, power failure, statistics, spool and monitor.
+
+use core::fmt;
+
+use heapless::Deque;
+
+use crate::image::{Conditioning, Forcing, Image, PointError};
+
+/// The only bridge between the executive and the plant: the program never sees it.
+pub trait Io<const IW: usize, const OW: usize> {
+    /// Reads every input word (the executive calls it once, at the start of a cycle).
+    fn read_inputs(&mut self, raw: &mut [u16; IW]);
+    /// Writes every output word (once, at the end of a cycle, or the safe state).
+    fn write_outputs(&mut self, outputs: &[u16; OW]);
+    /// Microseconds from a free-running clock (wrapping).
+    fn now_us(&mut self) -> u32;
+    /// Pulses a hardware watchdog, if the plant has one (the source pulsed it every 50 ms).
+    fn kick_watchdog(&mut self) {}
+}
+
+/// What the program sees in one cycle: the conditioned (and forced) input image, the output
+/// image of the previous cycle, and the output image it writes.
+#[derive(Debug)]
+pub struct Scan<'a, const IW: usize, const OW: usize> {
+    /// The input image, read at the start of this cycle.
+    pub inputs: &'a Image<IW>,
+    /// The outputs as written at the end of the previous cycle.
+    pub previous: &'a Image<OW>,
+    /// The outputs this cycle writes; it starts as a copy of `previous`.
+    pub outputs: &'a mut Image<OW>,
+    /// The cycle's number, from 1.
+    pub cycle: u64,
+    /// Milliseconds at the cycle's start (wrapping), for the timers.
+    pub now_ms: u32,
+}
+
+/// The executive's parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CycleConfig<const OW: usize> {
+    /// Cycle period, µs (the source: 50 ms).
+    pub period_us: u32,
+    /// A cycle that does not finish within this many µs of the last one trips the watchdog
+    /// (the source: 100 ms).
+    pub watchdog_us: u32,
+    /// The outputs written on a watchdog trip or a power failure (the source: all off).
+    pub safe_outputs: Image<OW>,
+}
+
+impl<const OW: usize> CycleConfig<OW> {
+    /// The source's timing: 50 ms cycle, 100 ms watchdog, all outputs off when safe.
+    #[must_use]
+    pub const fn source() -> CycleConfig<OW> {
+        CycleConfig {
+            period_us: 50_000,
+            watchdog_us: 100_000,
+            safe_outputs: Image::new(),
+        }
+    }
+}
+
+/// Why the executive did not run a cycle, or stopped running.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum Halt {
+    /// The power failed: outputs are safe and the state frozen until [`Executive::resume`].
+    PowerFail,
+    /// The watchdog tripped: outputs are safe until [`Executive::reset_watchdog`].
+    Watchdog,
+    /// A breakpoint was reached (after the cycle that reached it).
+    Breakpoint(Breakpoint),
+}
+
+impl fmt::Display for Halt {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Halt::PowerFail => f.write_str("power failure: outputs safe, state frozen"),
+            Halt::Watchdog => f.write_str("watchdog tripped: outputs safe"),
+            Halt::Breakpoint(b) => write!(f, "breakpoint {b:?} reached"),
+        }
+    }
+}
+
+impl core::error::Error for Halt {}
+
+/// A breakpoint of the monitor: the run stops after the cycle in which it holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Breakpoint {
+    /// After cycle number n.
+    Cycle(u64),
+    /// When an input point is on.
+    InputOn(usize),
+    /// When an output point is on.
+    OutputOn(usize),
+    /// When an output point is off.
+    OutputOff(usize),
+}
+
+/// Cycle statistics, as the source measured its load.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct CycleStats {
+    /// Cycles run.
+    pub cycles: u64,
+    /// Busy time of the last cycle (read, program, write), µs.
+    pub last_us: u32,
+    /// Shortest busy time, µs.
+    pub min_us: u32,
+    /// Longest busy time, µs.
+    pub max_us: u32,
+    /// Sum of busy times, µs (for the mean).
+    pub total_us: u64,
+    /// Largest deviation of a cycle start from the period after the previous start, µs.
+    pub jitter_us: u32,
+    /// Cycles whose busy time left no reserve (busy ≥ period).
+    pub overruns: u64,
+    /// Spool jobs run in the reserve.
+    pub spool_jobs: u64,
+}
+
+impl CycleStats {
+    /// Mean busy time, µs.
+    #[must_use]
+    pub fn mean_us(&self) -> u32 {
+        u32::try_from(self.total_us.checked_div(self.cycles).unwrap_or(0)).unwrap_or(u32::MAX)
+    }
+
+    /// Load: mean busy time as per mille of the period (the source: about 300).
+    #[must_use]
+    pub fn load_per_mille(&self, period_us: u32) -> u32 {
+        let busy = u64::from(self.mean_us()).saturating_mul(1000);
+        u32::try_from(busy.checked_div(u64::from(period_us)).unwrap_or(0)).unwrap_or(u32::MAX)
+    }
+}
+
+/// One-shot jobs run in the performance reserve (printouts, archiving), in order.
+///
+/// ```
+/// use regler_scan_cycle::Spool;
+/// let mut spool: Spool<&str, 2> = Spool::new();
+/// spool.push("print shift report").unwrap();
+/// spool.push("archive counters").unwrap();
+/// assert_eq!(spool.push("one too many"), Err("one too many")); // handed back
+/// ```
+#[derive(Clone, Debug)]
+pub struct Spool<J, const S: usize> {
+    jobs: Deque<J, S>,
+}
+
+impl<J, const S: usize> Default for Spool<J, S> {
+    fn default() -> Self {
+        Spool::new()
+    }
+}
+
+impl<J, const S: usize> Spool<J, S> {
+    /// An empty spool.
+    #[must_use]
+    pub const fn new() -> Spool<J, S> {
+        Spool { jobs: Deque::new() }
+    }
+
+    /// Queues a job; a full spool refuses it and hands it back.
+    pub fn push(&mut self, job: J) -> Result<(), J> {
+        self.jobs.push_back(job)
+    }
+
+    /// Jobs waiting.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.jobs.len()
+    }
+
+    /// Whether no job waits.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.jobs.is_empty()
+    }
+
+    /// The waiting jobs, oldest first.
+    pub fn iter(&self) -> impl Iterator<Item = &J> {
+        self.jobs.iter()
+    }
+
+    fn pop(&mut self) -> Option<J> {
+        self.jobs.pop_front()
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+enum State {
+    Running,
+    PowerFail,
+    Watchdog,
+}
+
+/// The cyclic executive of the 1989 controller (and the 1977 plant's levels A–C).
+///
+/// Each [`cycle`](Executive::cycle): read all inputs through [`Io`] into the raw image, condition
+/// them (latch, debounce) and apply the forced inputs; copy the previous output image into the
+/// next one; run the program on the images; apply the forced outputs; write the outputs; swap.
+/// [`reserve`](Executive::reserve) then runs spool jobs while time remains before the next cycle.
+///
+/// ```
+/// use regler_scan_cycle::{CycleConfig, Executive, Io};
+///
+/// struct Bench { inputs: [u16; 1], outputs: [u16; 1], t: u32 }
+/// impl Io<1, 1> for Bench {
+///     fn read_inputs(&mut self, raw: &mut [u16; 1]) { *raw = self.inputs; }
+///     fn write_outputs(&mut self, out: &[u16; 1]) { self.outputs = *out; }
+///     fn now_us(&mut self) -> u32 { self.t += 10; self.t }
+/// }
+///
+/// let mut plant = Bench { inputs: [0b1], outputs: [0], t: 0 };
+/// let mut plc: Executive<1, 1> = Executive::new(CycleConfig::source());
+/// // Output 0 follows input 0 inverted; output 1 counts cycles' parity from the previous image.
+/// plc.cycle(&mut plant, |scan| {
+///     scan.outputs.set(0, !scan.inputs.get(0)).ok();
+///     scan.outputs.set(1, !scan.previous.get(1)).ok();
+/// })?;
+/// assert_eq!(plant.outputs, [0b10]);
+/// # Ok::<(), regler_scan_cycle::Halt>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct Executive<const IW: usize, const OW: usize> {
+    config: CycleConfig<OW>,
+    raw: [u16; IW],
+    inputs: Image<IW>,
+    previous: Image<OW>,
+    next: Image<OW>,
+    conditioning: Conditioning<IW>,
+    force_inputs: Forcing<IW>,
+    force_outputs: Forcing<OW>,
+    stats: CycleStats,
+    state: State,
+    cycle: u64,
+    last_start_us: Option<u32>,
+    last_end_us: Option<u32>,
+    watchdog_trips: u32,
+}
+
+impl<const IW: usize, const OW: usize> Executive<IW, OW> {
+    /// An executive with all images off.
+    #[must_use]
+    pub const fn new(config: CycleConfig<OW>) -> Executive<IW, OW> {
+        Executive {
+            config,
+            raw: [0; IW],
+            inputs: Image::new(),
+            previous: Image::new(),
+            next: Image::new(),
+            conditioning: Conditioning::new(),
+            force_inputs: Forcing::new(),
+            force_outputs: Forcing::new(),
+            stats: CycleStats {
+                cycles: 0,
+                last_us: 0,
+                min_us: u32::MAX,
+                max_us: 0,
+                total_us: 0,
+                jitter_us: 0,
+                overruns: 0,
+                spool_jobs: 0,
+            },
+            state: State::Running,
+            cycle: 0,
+            last_start_us: None,
+            last_end_us: None,
+            watchdog_trips: 0,
+        }
+    }
+
+    /// One cycle with `program`. Refused while the power has failed or the watchdog is tripped.
+    pub fn cycle<I: Io<IW, OW>>(
+        &mut self,
+        io: &mut I,
+        program: impl FnOnce(&mut Scan<'_, IW, OW>),
+    ) -> Result<(), Halt> {
+        match self.state {
+            State::PowerFail => return Err(Halt::PowerFail),
+            State::Watchdog => return Err(Halt::Watchdog),
+            State::Running => {}
+        }
+        let start = io.now_us();
+        if let Some(last) = self.last_start_us {
+            let jitter = start.wrapping_sub(last).abs_diff(self.config.period_us);
+            self.stats.jitter_us = self.stats.jitter_us.max(jitter);
+        }
+        self.last_start_us = Some(start);
+        // Level A: all inputs in.
+        io.read_inputs(&mut self.raw);
+        self.conditioning.condition(&self.raw, &mut self.inputs);
+        self.force_inputs.apply(&mut self.inputs);
+        // Level B: the program, on the images only.
+        self.next = self.previous;
+        self.cycle = self.cycle.saturating_add(1);
+        let now_ms = start / 1000;
+        program(&mut Scan {
+            inputs: &self.inputs,
+            previous: &self.previous,
+            outputs: &mut self.next,
+            cycle: self.cycle,
+            now_ms,
+        });
+        self.force_outputs.apply(&mut self.next);
+        // Level A: all outputs out, images swapped.
+        io.write_outputs(self.next.words());
+        io.kick_watchdog();
+        self.previous = self.next;
+        let end = io.now_us();
+        self.last_end_us = Some(end);
+        let busy = end.wrapping_sub(start);
+        let s = &mut self.stats;
+        s.cycles = s.cycles.saturating_add(1);
+        s.last_us = busy;
+        s.min_us = s.min_us.min(busy);
+        s.max_us = s.max_us.max(busy);
+        s.total_us = s.total_us.saturating_add(u64::from(busy));
+        if busy >= self.config.period_us {
+            s.overruns = s.overruns.saturating_add(1);
+        }
+        Ok(())
+    }
+
+    /// Level C, the performance reserve: runs spool jobs while the next cycle is more than
+    /// `margin_us` away, then returns the jobs run. A job is never started without room left.
+    pub fn reserve<I: Io<IW, OW>, J, const S: usize>(
+        &mut self,
+        io: &mut I,
+        spool: &mut Spool<J, S>,
+        margin_us: u32,
+        mut run: impl FnMut(J),
+    ) -> usize {
+        let Some(start) = self.last_start_us else {
+            return 0;
+        };
+        let deadline = self.config.period_us.saturating_sub(margin_us);
+        let mut done = 0usize;
+        while io.now_us().wrapping_sub(start) < deadline {
+            let Some(job) = spool.pop() else { break };
+            run(job);
+            done = done.saturating_add(1);
+        }
+        self.stats.spool_jobs = self
+            .stats
+            .spool_jobs
+            .saturating_add(u64::try_from(done).unwrap_or(u64::MAX));
+        done
+    }
+
+    /// Checks the watchdog (call it from a clock interrupt or the idle loop): if no cycle has
+    /// finished within the limit, the safe outputs are written and cycles are refused.
+    /// Returns whether the watchdog is (now) tripped.
+    pub fn check_watchdog<I: Io<IW, OW>>(&mut self, io: &mut I) -> bool {
+        if self.state == State::Watchdog {
+            return true;
+        }
+        let Some(end) = self.last_end_us else {
+            return false;
+        };
+        if self.state == State::Running && io.now_us().wrapping_sub(end) > self.config.watchdog_us {
+            io.write_outputs(self.config.safe_outputs.words());
+            self.state = State::Watchdog;
+            self.watchdog_trips = self.watchdog_trips.saturating_add(1);
+            return true;
+        }
+        false
+    }
+
+    /// The operator has looked at the trip: cycles may run again.
+    pub fn reset_watchdog(&mut self) {
+        if self.state == State::Watchdog {
+            self.state = State::Running;
+            self.last_end_us = None;
+            self.last_start_us = None;
+        }
+    }
+
+    /// Power failure: writes the safe outputs and freezes the state (images, conditioning,
+    /// latched inputs, statistics; the program's timers and counters are its own and are not
+    /// touched). Latched inputs are still captured, as the source's battery-backed input
+    /// flip-flops did.
+    pub fn power_fail<I: Io<IW, OW>>(&mut self, io: &mut I) {
+        io.write_outputs(self.config.safe_outputs.words());
+        self.state = State::PowerFail;
+    }
+
+    /// Power is back: the next cycle continues where the last one left off, with the inputs
+    /// latched meanwhile. The first cycle after a resume is not counted as jitter.
+    pub fn resume(&mut self) {
+        if self.state == State::PowerFail {
+            self.state = State::Running;
+            self.last_start_us = None;
+            self.last_end_us = None;
+        }
+    }
+
+    /// Captures the latched inputs between cycles (see [`Conditioning`]).
+    pub fn capture(&mut self, raw: &[u16; IW]) {
+        self.conditioning.capture(raw);
+    }
+
+    /// Input conditioning: latching and debounce counts.
+    pub fn conditioning_mut(&mut self) -> &mut Conditioning<IW> {
+        &mut self.conditioning
+    }
+
+    /// Forces input `point` (the monitor).
+    pub fn force_input(&mut self, point: usize, on: bool) -> Result<(), PointError> {
+        self.force_inputs.force(point, on)
+    }
+
+    /// Releases input `point`.
+    pub fn unforce_input(&mut self, point: usize) -> Result<(), PointError> {
+        self.force_inputs.unforce(point)
+    }
+
+    /// Forces output `point`.
+    pub fn force_output(&mut self, point: usize, on: bool) -> Result<(), PointError> {
+        self.force_outputs.force(point, on)
+    }
+
+    /// Releases output `point`.
+    pub fn unforce_output(&mut self, point: usize) -> Result<(), PointError> {
+        self.force_outputs.unforce(point)
+    }
+
+    /// The forced inputs.
+    #[must_use]
+    pub const fn forced_inputs(&self) -> &Forcing<IW> {
+        &self.force_inputs
+    }
+
+    /// The forced outputs.
+    #[must_use]
+    pub const fn forced_outputs(&self) -> &Forcing<OW> {
+        &self.force_outputs
+    }
+
+    /// The input image of the last cycle.
+    #[must_use]
+    pub const fn inputs(&self) -> &Image<IW> {
+        &self.inputs
+    }
+
+    /// The output image written at the end of the last cycle.
+    #[must_use]
+    pub const fn outputs(&self) -> &Image<OW> {
+        &self.previous
+    }
+
+    /// The raw input words of the last read.
+    #[must_use]
+    pub const fn raw_inputs(&self) -> &[u16; IW] {
+        &self.raw
+    }
+
+    /// Cycle statistics.
+    #[must_use]
+    pub const fn stats(&self) -> &CycleStats {
+        &self.stats
+    }
+
+    /// Cycles run.
+    #[must_use]
+    pub const fn cycle_count(&self) -> u64 {
+        self.cycle
+    }
+
+    /// Times the watchdog tripped.
+    #[must_use]
+    pub const fn watchdog_trips(&self) -> u32 {
+        self.watchdog_trips
+    }
+
+    /// Whether cycles are refused, and why.
+    #[must_use]
+    pub const fn halted(&self) -> Option<Halt> {
+        match self.state {
+            State::Running => None,
+            State::PowerFail => Some(Halt::PowerFail),
+            State::Watchdog => Some(Halt::Watchdog),
+        }
+    }
+
+    /// The configuration.
+    #[must_use]
+    pub const fn config(&self) -> &CycleConfig<OW> {
+        &self.config
+    }
+
+    /// Whether `breakpoint` holds after the last cycle.
+    #[must_use]
+    pub fn reached(&self, breakpoint: Breakpoint) -> bool {
+        match breakpoint {
+            Breakpoint::Cycle(n) => self.cycle >= n,
+            Breakpoint::InputOn(p) => self.inputs.get(p),
+            Breakpoint::OutputOn(p) => self.previous.get(p),
+            Breakpoint::OutputOff(p) => self.previous.try_get(p) == Some(false),
+        }
+    }
+
+    /// The monitor's run command: up to `cycles` cycles (`u64::MAX`: continuous), stopping after
+    /// the first cycle at which one of `breakpoints` holds. `between` runs after every cycle (the
+    /// reserve, the plant simulation). Returns the cycles run and why the run stopped early.
+    pub fn run<I: Io<IW, OW>, P: FnMut(&mut Scan<'_, IW, OW>)>(
+        &mut self,
+        io: &mut I,
+        cycles: u64,
+        breakpoints: &[Breakpoint],
+        mut program: P,
+        mut between: impl FnMut(&mut Self, &mut I),
+    ) -> (u64, Option<Halt>) {
+        let mut done = 0u64;
+        while done < cycles {
+            if let Err(halt) = self.cycle(io, &mut program) {
+                return (done, Some(halt));
+            }
+            done = done.saturating_add(1);
+            between(self, io);
+            if let Some(&b) = breakpoints.iter().find(|b| self.reached(**b)) {
+                return (done, Some(Halt::Breakpoint(b)));
+            }
+        }
+        (done, None)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Sim {
+        inputs: [u16; 2],
+        outputs: [u16; 1],
+        writes: u32,
+        t: u32,
+        step_us: u32,
+    }
+
+    impl Io<2, 1> for Sim {
+        fn read_inputs(&mut self, raw: &mut [u16; 2]) {
+            *raw = self.inputs;
+        }
+        fn write_outputs(&mut self, out: &[u16; 1]) {
+            self.outputs = *out;
+            self.writes += 1;
+        }
+        fn now_us(&mut self) -> u32 {
+            self.t = self.t.wrapping_add(self.step_us);
+            self.t
+        }
+    }
+
+    fn sim() -> Sim {
+        Sim {
+            inputs: [0; 2],
+            outputs: [0],
+            writes: 0,
+            t: 0,
+            step_us: 1000,
+        }
+    }
+
+    #[test]
+    fn program_sees_images_only_and_outputs_swap() {
+        let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(CycleConfig::source()));
+        io.inputs = [0b1, 0];
+        plc.cycle(&mut io, |s| {
+            assert!(s.inputs.get(0));
+            assert!(!s.previous.get(0));
+            s.outputs.set(0, true).unwrap();
+            io_is_not_here();
+        })
+        .unwrap();
+        assert_eq!(io.outputs, [1]);
+        io.inputs = [0, 0];
+        plc.cycle(&mut io, |s| {
+            assert!(s.previous.get(0), "previous output image");
+            assert!(s.outputs.get(0), "next image starts as the previous");
+            s.outputs.set(0, false).unwrap();
+        })
+        .unwrap();
+        assert_eq!(io.outputs, [0]);
+        assert_eq!(plc.cycle_count(), 2);
+    }
+
+    fn io_is_not_here() {}
+
+    #[test]
+    fn forced_values_win_over_program_and_hardware() {
+        let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(CycleConfig::source()));
+        plc.force_input(17, true).unwrap();
+        plc.force_output(3, true).unwrap();
+        plc.cycle(&mut io, |s| {
+            assert!(s.inputs.get(17));
+            s.outputs.set(3, false).unwrap();
+        })
+        .unwrap();
+        assert_eq!(io.outputs, [1 << 3]);
+        assert_eq!(plc.forced_outputs().forced(3), Some(true));
+        plc.unforce_output(3).unwrap();
+        plc.cycle(&mut io, |s| s.outputs.set(3, false).unwrap())
+            .unwrap();
+        assert_eq!(io.outputs, [0]);
+        assert!(plc.force_input(32, true).is_err());
+    }
+
+    #[test]
+    fn watchdog_trips_to_safe_outputs() {
+        let mut config = CycleConfig::source();
+        config.safe_outputs = Image::from_words([0b100]);
+        let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(config));
+        plc.cycle(&mut io, |s| s.outputs.set(0, true).unwrap())
+            .unwrap();
+        io.step_us = 50_000;
+        assert!(!plc.check_watchdog(&mut io)); // 50 ms since the last cycle
+        assert!(!plc.check_watchdog(&mut io)); // 100 ms: at the limit
+        assert!(plc.check_watchdog(&mut io)); // 150 ms: tripped
+        assert_eq!(io.outputs, [0b100]);
+        assert_eq!(plc.cycle(&mut io, |_| {}), Err(Halt::Watchdog));
+        assert_eq!(plc.watchdog_trips(), 1);
+        plc.reset_watchdog();
+        assert!(plc.cycle(&mut io, |_| {}).is_ok());
+    }
+
+    #[test]
+    fn power_failure_freezes_and_resume_keeps_latched_inputs() {
+        let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(CycleConfig::source()));
+        plc.conditioning_mut().set_latched(5, true).unwrap();
+        plc.cycle(&mut io, |s| s.outputs.set(1, true).unwrap())
+            .unwrap();
+        plc.power_fail(&mut io);
+        assert_eq!(io.outputs, [0]);
+        assert_eq!(plc.halted(), Some(Halt::PowerFail));
+        assert_eq!(plc.cycle(&mut io, |_| {}), Err(Halt::PowerFail));
+        plc.capture(&[1 << 5, 0]); // a pulse during the outage
+        plc.resume();
+        plc.cycle(&mut io, |s| {
+            assert!(s.inputs.get(5), "latched during the outage");
+            assert!(s.previous.get(1), "output image kept");
+        })
+        .unwrap();
+        assert_eq!(io.outputs, [0b10]);
+    }
+
+    #[test]
+    fn stats_overruns_and_spool() {
+        let (mut io, mut plc) = (
+            sim(),
+            Executive::<2, 1>::new(CycleConfig {
+                period_us: 10_000,
+                ..CycleConfig::source()
+            }),
+        );
+        plc.cycle(&mut io, |_| {}).unwrap();
+        io.step_us = 20_000; // a slow cycle: busy 20 ms > 10 ms period
+        plc.cycle(&mut io, |_| {}).unwrap();
+        let s = *plc.stats();
+        assert_eq!(
+            (s.cycles, s.overruns, s.min_us, s.max_us),
+            (2, 1, 1000, 20_000)
+        );
+        assert_eq!(s.mean_us(), 10_500);
+        assert_eq!(s.load_per_mille(10_000), 1050);
+        io.step_us = 1000;
+        plc.cycle(&mut io, |_| {}).unwrap();
+        let mut spool: Spool<u32, 8> = Spool::new();
+        for j in 0..8 {
+            spool.push(j).unwrap();
+        }
+        let mut ran = Vec::new();
+        // 1 ms per clock read: the reserve before the 10 ms period (less 3 ms margin) fits 5 jobs.
+        let n = plc.reserve(&mut io, &mut spool, 3_000, |j| ran.push(j));
+        assert_eq!(n, ran.len());
+        assert!((1..8).contains(&n), "{n}");
+        assert_eq!(ran, (0..n as u32).collect::<Vec<_>>());
+        assert_eq!(spool.len(), 8 - n);
+    }
+
+    #[test]
+    fn run_stops_at_breakpoints() {
+        let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(CycleConfig::source()));
+        let (n, why) = plc.run(&mut io, 10, &[Breakpoint::Cycle(4)], |_| {}, |_, _| {});
+        assert_eq!((n, why), (4, Some(Halt::Breakpoint(Breakpoint::Cycle(4)))));
+        let program = |s: &mut Scan<'_, 2, 1>| {
+            s.outputs.set(2, s.cycle.is_multiple_of(3)).unwrap();
+        };
+        let (n, why) = plc.run(
+            &mut io,
+            u64::MAX,
+            &[Breakpoint::OutputOn(2)],
+            program,
+            |_, _| {},
+        );
+        assert_eq!(
+            (n, why),
+            (2, Some(Halt::Breakpoint(Breakpoint::OutputOn(2))))
+        );
+        let (n, why) = plc.run(&mut io, 3, &[], program, |_, _| {});
+        assert_eq!((n, why), (3, None));
+    }
+}

@@ -1,0 +1,452 @@
+//! Process images (words of 16 I/O points), forcing, and input conditioning.
+
+use core::fmt;
+
+/// I/O points per image word, as the source hardware's 16-bit words.
+pub const POINTS_PER_WORD: usize = 16;
+
+/// A point number outside an image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PointError {
+    /// The point asked for.
+    pub point: usize,
+    /// Points in the image.
+    pub points: usize,
+}
+
+impl fmt::Display for PointError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "I/O point {} is outside the image of {} points",
+            self.point, self.points
+        )
+    }
+}
+
+impl core::error::Error for PointError {}
+
+/// A process image: `W` words of 16 points; point `p` is bit `p % 16` of word `p / 16`.
+///
+/// ```
+/// use regler_scan_cycle::Image;
+/// let mut outputs: Image<15> = Image::new(); // the 1977 plant's 240 outputs
+/// outputs.set(37, true)?;
+/// assert!(outputs.get(37));
+/// assert_eq!(outputs.word(2), Some(1 << 5));
+/// assert!(outputs.set(240, true).is_err());
+/// # Ok::<(), regler_scan_cycle::PointError>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Image<const W: usize> {
+    #[cfg_attr(feature = "serde", serde(with = "serde_words"))]
+    words: [u16; W],
+}
+
+impl<const W: usize> Default for Image<W> {
+    fn default() -> Self {
+        Image::new()
+    }
+}
+
+impl<const W: usize> Image<W> {
+    /// Points in the image.
+    pub const POINTS: usize = W * POINTS_PER_WORD;
+
+    /// All points off.
+    #[must_use]
+    pub const fn new() -> Image<W> {
+        Image { words: [0; W] }
+    }
+
+    /// An image of these words.
+    #[must_use]
+    pub const fn from_words(words: [u16; W]) -> Image<W> {
+        Image { words }
+    }
+
+    /// Point `point`; a point outside the image reads as off (see [`try_get`](Image::try_get)).
+    #[must_use]
+    pub fn get(&self, point: usize) -> bool {
+        self.try_get(point).unwrap_or(false)
+    }
+
+    /// Point `point`, or `None` outside the image.
+    #[must_use]
+    pub fn try_get(&self, point: usize) -> Option<bool> {
+        let word = self.words.get(point / POINTS_PER_WORD)?;
+        Some(word >> (point % POINTS_PER_WORD) & 1 == 1)
+    }
+
+    /// Sets point `point`.
+    pub fn set(&mut self, point: usize, on: bool) -> Result<(), PointError> {
+        let points = Self::POINTS;
+        let word = self
+            .words
+            .get_mut(point / POINTS_PER_WORD)
+            .ok_or(PointError { point, points })?;
+        let bit = 1u16 << (point % POINTS_PER_WORD);
+        if on {
+            *word |= bit;
+        } else {
+            *word &= !bit;
+        }
+        Ok(())
+    }
+
+    /// Word `index`.
+    #[must_use]
+    pub fn word(&self, index: usize) -> Option<u16> {
+        self.words.get(index).copied()
+    }
+
+    /// Sets word `index`.
+    pub fn set_word(&mut self, index: usize, value: u16) -> Result<(), PointError> {
+        let points = Self::POINTS;
+        let word = self.words.get_mut(index).ok_or(PointError {
+            point: index.saturating_mul(16),
+            points,
+        })?;
+        *word = value;
+        Ok(())
+    }
+
+    /// All words.
+    #[must_use]
+    pub const fn words(&self) -> &[u16; W] {
+        &self.words
+    }
+
+    /// All words, to fill.
+    pub fn words_mut(&mut self) -> &mut [u16; W] {
+        &mut self.words
+    }
+
+    /// Points that are on, in order.
+    pub fn ones(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..Self::POINTS).filter(|&p| self.get(p))
+    }
+}
+
+#[cfg(feature = "serde")]
+mod serde_words {
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub(super) fn serialize<S: Serializer, const W: usize>(
+        words: &[u16; W],
+        s: S,
+    ) -> Result<S::Ok, S::Error> {
+        words.as_slice().serialize(s)
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>, const W: usize>(
+        d: D,
+    ) -> Result<[u16; W], D::Error> {
+        let v = heapless::Vec::<u16, W>::deserialize(d)?;
+        v.into_array()
+            .map_err(|_| serde::de::Error::custom("wrong number of image words"))
+    }
+}
+
+/// Forced points of one image: forced values win over the program and the hardware.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Forcing<const W: usize> {
+    mask: Image<W>,
+    values: Image<W>,
+}
+
+impl<const W: usize> Default for Forcing<W> {
+    fn default() -> Self {
+        Forcing::new()
+    }
+}
+
+impl<const W: usize> Forcing<W> {
+    /// Nothing forced.
+    #[must_use]
+    pub const fn new() -> Forcing<W> {
+        Forcing {
+            mask: Image::new(),
+            values: Image::new(),
+        }
+    }
+
+    /// Forces `point` to `on`.
+    pub fn force(&mut self, point: usize, on: bool) -> Result<(), PointError> {
+        self.mask.set(point, true)?;
+        self.values.set(point, on)
+    }
+
+    /// Releases `point`.
+    pub fn unforce(&mut self, point: usize) -> Result<(), PointError> {
+        self.mask.set(point, false)?;
+        self.values.set(point, false)
+    }
+
+    /// Releases every point.
+    pub fn clear(&mut self) {
+        *self = Forcing::new();
+    }
+
+    /// The forced value of `point`, if forced.
+    #[must_use]
+    pub fn forced(&self, point: usize) -> Option<bool> {
+        self.mask.get(point).then(|| self.values.get(point))
+    }
+
+    /// Whether any point is forced.
+    #[must_use]
+    pub fn any(&self) -> bool {
+        self.mask.words().iter().any(|&w| w != 0)
+    }
+
+    /// The forced points and their values.
+    pub fn iter(&self) -> impl Iterator<Item = (usize, bool)> + '_ {
+        self.mask.ones().map(|p| (p, self.values.get(p)))
+    }
+
+    /// Applies the forcing to `image`, word by word.
+    #[inline]
+    pub fn apply(&self, image: &mut Image<W>) {
+        for ((w, m), v) in image
+            .words
+            .iter_mut()
+            .zip(self.mask.words.iter())
+            .zip(self.values.words.iter())
+        {
+            *w = (*w & !m) | (v & m);
+        }
+    }
+}
+
+/// Input conditioning: latching of pulses shorter than a cycle, and debouncing.
+///
+/// **Latch.** For latched inputs, every [`capture`](Conditioning::capture) of the raw inputs
+/// (from a fast clock interrupt, as the 1977 plant's input flip-flops did in hardware) remembers
+/// each input that was on; at the next cycle the input reads on even if the pulse is over, and
+/// the memory is cleared.
+///
+/// **Debounce.** A debounced input with count k changes its conditioned value only after k
+/// consecutive readings that differ from it (1 = no debounce; at most 15). The counters are
+/// bit-sliced, four bit planes per word, so a cycle costs a few dozen word operations per 16
+/// inputs, whatever the counts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Conditioning<const W: usize> {
+    latched: Image<W>,
+    pending: Image<W>,
+    stable: Image<W>,
+    counters: [Image<W>; 4],
+    thresholds: [Image<W>; 4],
+}
+
+impl<const W: usize> Default for Conditioning<W> {
+    fn default() -> Self {
+        Conditioning::new()
+    }
+}
+
+/// A debounce count outside 1..=15.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum DebounceError {
+    /// The point is outside the image.
+    Point(PointError),
+    /// The count is not within 1..=15.
+    Count(u8),
+}
+
+impl fmt::Display for DebounceError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DebounceError::Point(e) => e.fmt(f),
+            DebounceError::Count(k) => write!(f, "a debounce count is 1..=15 readings, got {k}"),
+        }
+    }
+}
+
+impl core::error::Error for DebounceError {}
+
+impl<const W: usize> Conditioning<W> {
+    /// No latching, no debouncing (every count 1).
+    #[must_use]
+    pub const fn new() -> Conditioning<W> {
+        let mut thresholds = [Image::new(), Image::new(), Image::new(), Image::new()];
+        thresholds[0] = Image::from_words([u16::MAX; W]); // count 1 everywhere
+        Conditioning {
+            latched: Image::new(),
+            pending: Image::new(),
+            stable: Image::new(),
+            counters: [Image::new(), Image::new(), Image::new(), Image::new()],
+            thresholds,
+        }
+    }
+
+    /// Latches (or stops latching) short pulses on `point`.
+    pub fn set_latched(&mut self, point: usize, latched: bool) -> Result<(), PointError> {
+        self.latched.set(point, latched)
+    }
+
+    /// Sets the debounce count of `point` (1..=15 consecutive readings).
+    pub fn set_debounce(&mut self, point: usize, count: u8) -> Result<(), DebounceError> {
+        if !(1..=15).contains(&count) {
+            return Err(DebounceError::Count(count));
+        }
+        for (bit, plane) in self.thresholds.iter_mut().enumerate() {
+            plane
+                .set(point, count >> bit & 1 == 1)
+                .map_err(DebounceError::Point)?;
+        }
+        Ok(())
+    }
+
+    /// The debounce count of `point`.
+    #[must_use]
+    pub fn debounce(&self, point: usize) -> u8 {
+        (0u8..)
+            .zip(self.thresholds.iter())
+            .fold(0, |k, (bit, plane)| k | (u8::from(plane.get(point)) << bit))
+    }
+
+    /// Remembers which latched inputs are on now (call as often as the hardware allows).
+    pub fn capture(&mut self, raw: &[u16; W]) {
+        for ((p, r), l) in self
+            .pending
+            .words
+            .iter_mut()
+            .zip(raw.iter())
+            .zip(self.latched.words.iter())
+        {
+            *p |= r & l;
+        }
+    }
+
+    /// One cycle: turns raw readings into the conditioned input image.
+    #[inline]
+    pub fn condition(&mut self, raw: &[u16; W], out: &mut Image<W>) {
+        let [c0, c1, c2, c3] = &mut self.counters;
+        let [k0, k1, k2, k3] = &self.thresholds;
+        let words = raw
+            .iter()
+            .zip(self.pending.words.iter_mut())
+            .zip(self.stable.words.iter_mut())
+            .zip(out.words.iter_mut())
+            .zip(
+                c0.words
+                    .iter_mut()
+                    .zip(c1.words.iter_mut())
+                    .zip(c2.words.iter_mut().zip(c3.words.iter_mut())),
+            )
+            .zip(
+                k0.words
+                    .iter()
+                    .zip(k1.words.iter())
+                    .zip(k2.words.iter().zip(k3.words.iter())),
+            );
+        for (((((raw, pending), stable), out), ((c0, c1), (c2, c3))), ((k0, k1), (k2, k3))) in words
+        {
+            // A latched pulse reads on once, then is forgotten.
+            let reading = raw | *pending;
+            *pending = 0;
+            let diff = reading ^ *stable;
+            // Bit-sliced increment of the counters of the differing inputs; others restart at 0.
+            let mut carry = diff;
+            *c0 ^= carry;
+            carry &= !*c0;
+            *c1 ^= carry;
+            carry &= !*c1;
+            *c2 ^= carry;
+            carry &= !*c2;
+            *c3 ^= carry;
+            *c0 &= diff;
+            *c1 &= diff;
+            *c2 &= diff;
+            *c3 &= diff;
+            let reached = diff & !((*c0 ^ k0) | (*c1 ^ k1) | (*c2 ^ k2) | (*c3 ^ k3));
+            *stable ^= reached;
+            *c0 &= !reached;
+            *c1 &= !reached;
+            *c2 &= !reached;
+            *c3 &= !reached;
+            *out = *stable;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn forcing_wins_and_is_visible() {
+        let mut f: Forcing<2> = Forcing::new();
+        f.force(3, true).unwrap();
+        f.force(17, false).unwrap();
+        let mut img = Image::from_words([0, 0xFFFF]);
+        f.apply(&mut img);
+        assert!(img.get(3) && !img.get(17) && img.get(18));
+        assert_eq!(f.forced(3), Some(true));
+        assert_eq!(f.iter().collect::<Vec<_>>(), [(3, true), (17, false)]);
+        f.unforce(3).unwrap();
+        assert_eq!(f.forced(3), None);
+        assert!(f.force(32, true).is_err());
+    }
+
+    #[test]
+    fn debounce_needs_k_consecutive_readings() {
+        let mut c: Conditioning<1> = Conditioning::new();
+        c.set_debounce(0, 3).unwrap();
+        assert_eq!(c.debounce(0), 3);
+        assert_eq!(c.debounce(1), 1);
+        let mut out = Image::new();
+        let mut seen = Vec::new();
+        for raw in [1u16, 1, 0, 1, 1, 1, 1, 0, 0, 0] {
+            c.condition(&[raw | 0b10], &mut out);
+            seen.push((out.get(0), out.get(1)));
+        }
+        // Point 1 (count 1) follows at once; point 0 needs three in a row.
+        let p0: Vec<bool> = seen.iter().map(|s| s.0).collect();
+        assert_eq!(
+            p0,
+            [
+                false, false, false, false, false, true, true, true, true, false
+            ]
+        );
+        assert!(seen.iter().all(|s| s.1));
+        assert_eq!(c.set_debounce(0, 0), Err(DebounceError::Count(0)));
+        assert_eq!(c.set_debounce(0, 16), Err(DebounceError::Count(16)));
+    }
+
+    #[test]
+    fn every_count_up_to_15_works() {
+        for k in 1..=15u8 {
+            let mut c: Conditioning<1> = Conditioning::new();
+            c.set_debounce(5, k).unwrap();
+            let mut out = Image::new();
+            let mut n = 0;
+            while !out.get(5) {
+                c.condition(&[1 << 5], &mut out);
+                n += 1;
+            }
+            assert_eq!(n, k);
+        }
+    }
+
+    #[test]
+    fn latched_pulses_between_cycles_are_seen_once() {
+        let mut c: Conditioning<1> = Conditioning::new();
+        c.set_latched(4, true).unwrap();
+        let mut out = Image::new();
+        c.capture(&[1 << 4 | 1 << 6]); // a short pulse on 4 and 6; only 4 is latched
+        c.condition(&[0], &mut out);
+        assert!(out.get(4) && !out.get(6));
+        c.condition(&[0], &mut out);
+        assert!(!out.get(4));
+    }
+}

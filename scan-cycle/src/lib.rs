@@ -1,0 +1,24 @@
+#![doc = include_str!("../README.md")]
+#![cfg_attr(not(test), no_std)]
+#![forbid(unsafe_code)]
+#![doc(test(attr(deny(warnings))))]
+#![cfg_attr(
+    test,
+    allow(
+        clippy::arithmetic_side_effects,
+        clippy::cast_possible_truncation,
+        reason = "tests compute expected values freely; a panic is a failure"
+    )
+)]
+
+mod blocks;
+mod calendar;
+mod executive;
+mod image;
+mod timer_queue;
+
+pub use blocks::{Ctd, Ctu, Ctud, FTrig, RTrig, Rs, Sr, Tof, Ton, Tp};
+pub use calendar::{DateTime, InvalidDateTime, MinuteTable, Start, Weekdays};
+pub use executive::{Breakpoint, CycleConfig, CycleStats, Executive, Halt, Io, Scan, Spool};
+pub use image::{Conditioning, DebounceError, Forcing, Image, POINTS_PER_WORD, PointError};
+pub use timer_queue::{QueueFull, TimerId, TimerQueue, UnknownTimer};

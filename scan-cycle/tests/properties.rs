@@ -1,0 +1,143 @@
+//! TimerQueue against a naive list, and the IEC blocks against straightforward references.
+#![allow(
+    clippy::unwrap_used,
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::cast_possible_truncation,
+    reason = "a test may panic: that is how it fails"
+)]
+
+use proptest::prelude::{any, prop, prop_assert_eq, prop_oneof, proptest};
+use proptest::strategy::Strategy;
+use regler_scan_cycle::{Ctu, TimerId, TimerQueue, Tof, Ton};
+
+#[derive(Clone, Debug)]
+enum Op {
+    Insert(u32),
+    Replace(usize, u32),
+    Remove(usize),
+    Tick(u32),
+}
+
+fn ticks() -> impl Strategy<Value = u32> {
+    prop_oneof![
+        0u32..5,
+        0u32..100,
+        60u32..5000,
+        any::<u32>().prop_map(|t| t % 300_000)
+    ]
+}
+
+fn op() -> impl Strategy<Value = Op> {
+    prop_oneof![
+        3 => ticks().prop_map(Op::Insert),
+        1 => (any::<usize>(), ticks()).prop_map(|(i, t)| Op::Replace(i, t)),
+        1 => any::<usize>().prop_map(Op::Remove),
+        3 => prop_oneof![1u32..3, 1u32..200, 1000u32..6000].prop_map(Op::Tick),
+    ]
+}
+
+/// The naive register: a list of (deadline, order, action), scanned every tick.
+#[derive(Default)]
+struct Naive {
+    now: u64,
+    order: u64,
+    entries: Vec<(u64, u64, u32)>,
+}
+
+proptest! {
+    #[test]
+    fn timer_queue_matches_a_naive_list(ops in prop::collection::vec(op(), 1..80)) {
+        const N: usize = 16;
+        let mut queue: TimerQueue<u32, N> = TimerQueue::new();
+        let mut naive = Naive::default();
+        let mut handles: Vec<(TimerId, u32)> = Vec::new(); // every handle ever issued, with its action
+        let mut next_action = 0u32;
+        for op in ops {
+            match op {
+                Op::Insert(t) => {
+                    next_action += 1;
+                    let got = queue.insert(t, next_action);
+                    if naive.entries.len() == N {
+                        prop_assert_eq!(got.unwrap_err().0, next_action);
+                    } else {
+                        handles.push((got.unwrap(), next_action));
+                        naive.order += 1;
+                        naive.entries.push((naive.now + u64::from(t.max(1)), naive.order, next_action));
+                    }
+                }
+                Op::Replace(i, t) if !handles.is_empty() => {
+                    let (id, action) = handles[i % handles.len()];
+                    let waiting = naive.entries.iter().position(|e| e.2 == action);
+                    prop_assert_eq!(queue.replace(id, t).is_ok(), waiting.is_some());
+                    if let Some(p) = waiting {
+                        naive.order += 1;
+                        naive.entries[p] = (naive.now + u64::from(t.max(1)), naive.order, action);
+                    }
+                }
+                Op::Remove(i) if !handles.is_empty() => {
+                    let (id, action) = handles[i % handles.len()];
+                    let waiting = naive.entries.iter().position(|e| e.2 == action);
+                    prop_assert_eq!(queue.remove(id), waiting.map(|_| action));
+                    if let Some(p) = waiting {
+                        naive.entries.remove(p);
+                    }
+                }
+                Op::Tick(k) => {
+                    for _ in 0..k {
+                        naive.now += 1;
+                        let mut due: Vec<(u64, u64, u32)> = naive.entries.iter().copied().filter(|e| e.0 == naive.now).collect();
+                        due.sort_by_key(|e| e.1);
+                        naive.entries.retain(|e| e.0 != naive.now);
+                        let mut got = Vec::new();
+                        queue.tick(|a| got.push(a));
+                        prop_assert_eq!(got, due.iter().map(|e| e.2).collect::<Vec<_>>());
+                    }
+                }
+                _ => {}
+            }
+            prop_assert_eq!(queue.len(), naive.entries.len());
+            for &(id, action) in &handles {
+                let want = naive.entries.iter().find(|e| e.2 == action).map(|e| (e.0 - naive.now) as u32);
+                prop_assert_eq!(queue.remaining(id), want);
+            }
+        }
+    }
+
+    /// TON and TOF against their definitions over random input and time steps.
+    #[test]
+    fn ton_tof_match_their_definitions(
+        pt in 0u32..300,
+        steps in prop::collection::vec((any::<bool>(), 0u32..120), 1..100),
+        start in any::<u32>(),
+    ) {
+        let (mut ton, mut tof) = (Ton::new(pt), Tof::new(pt));
+        let mut now = start;
+        let (mut on_since, mut off_since): (Option<u64>, Option<u64>) = (None, None);
+        let mut t: u64 = 0;
+        let mut ever_on = false;
+        for (input, dt) in steps {
+            now = now.wrapping_add(dt);
+            t += u64::from(dt);
+            if input { on_since.get_or_insert(t); off_since = None; ever_on = true; } else { on_since = None; if ever_on { off_since.get_or_insert(t); } }
+            let want_ton = on_since.is_some_and(|s| t - s >= u64::from(pt));
+            let want_tof = input || off_since.is_some_and(|s| t - s < u64::from(pt));
+            prop_assert_eq!(ton.call(input, now), want_ton);
+            prop_assert_eq!(tof.call(input, now), want_tof);
+            prop_assert_eq!(u64::from(ton.et()), on_since.map_or(0, |s| (t - s).min(u64::from(pt))));
+        }
+    }
+
+    /// CTU counts rising edges.
+    #[test]
+    fn ctu_counts_rising_edges(inputs in prop::collection::vec((any::<bool>(), prop::bool::weighted(0.05)), 1..200), pv in 0i32..20) {
+        let mut ctu = Ctu::new(pv);
+        let (mut cv, mut prev) = (0i32, false);
+        for (cu, reset) in inputs {
+            if reset { cv = 0 } else if cu && !prev { cv += 1 }
+            prev = cu;
+            prop_assert_eq!(ctu.call(cu, reset), cv >= pv);
+            prop_assert_eq!(ctu.cv(), cv);
+        }
+    }
+}
