@@ -5,3 +5,4 @@ pub mod count_down;
 pub mod dock;
 pub mod naive_decode;
 pub mod pid_loop;
+pub mod scan;

@@ -6,6 +6,7 @@ const BITS: u32 = 6;
 const SLOTS: usize = 1 << BITS;
 /// Six levels of 64 slots cover deadlines up to 2³⁶ ticks ahead: more than any `u32` delay.
 const LEVELS: usize = 6;
+const LEVELS_U32: u32 = 6;
 const NIL: u32 = u32::MAX;
 
 /// A handle on an inserted timer. It stays valid until the timer expires or is removed; after
@@ -190,12 +191,15 @@ impl<A, const N: usize> TimerQueue<A, N> {
     /// One tick: every action whose time has come goes to `on_expire`, in order.
     pub fn tick(&mut self, mut on_expire: impl FnMut(A)) {
         self.now = self.now.wrapping_add(1);
-        // Entering a new block at level k: move that level's slot for the block down.
-        for level in (1..LEVELS).rev() {
-            let shift = BITS.saturating_mul(u32::try_from(level).unwrap_or(0));
-            if self.now.trailing_zeros() >= shift {
-                let slot = level_slot(level, self.now >> shift);
-                self.cascade(slot);
+        // Entering a new block at level k (the low 6k bits of now are zero): move that level's
+        // slot for the block down. Most ticks enter no block at all.
+        if self.now.trailing_zeros() >= BITS {
+            let zeros = self.now.trailing_zeros();
+            for level in (1..LEVELS_U32).rev() {
+                let shift = BITS.wrapping_mul(level);
+                if zeros >= shift {
+                    self.cascade(level_slot(level as usize, self.now.wrapping_shr(shift)));
+                }
             }
         }
         let slot = level_slot(0, self.now);
@@ -250,39 +254,39 @@ impl<A, const N: usize> TimerQueue<A, N> {
     }
 
     /// The slot for a deadline: the level is the highest 6-bit group in which it differs from now.
+    #[inline]
     fn slot_for(&self, deadline: u64) -> usize {
-        let differ = deadline ^ self.now;
-        let top = 63u32.saturating_sub(differ.leading_zeros());
-        let level = if differ == 0 {
-            0
-        } else {
-            usize::try_from(top / BITS).unwrap_or(0).min(LEVELS - 1)
-        };
-        let shift = BITS.saturating_mul(u32::try_from(level).unwrap_or(0));
-        level_slot(level, deadline >> shift)
+        // `| 1` makes "no difference" level 0; the level is at most 63 / 6 = 10, capped at 5,
+        // so the slot is below LEVELS * SLOTS and the lookups below need no bounds failure path.
+        let top = 63u32.wrapping_sub((deadline ^ self.now | 1).leading_zeros());
+        let level = (top / BITS).min(LEVELS_U32.wrapping_sub(1));
+        level_slot(
+            level as usize,
+            deadline.wrapping_shr(level.wrapping_mul(BITS)),
+        )
     }
 
+    #[inline]
     fn link(&mut self, index: u32) {
-        let Some(deadline) = self.entries.get(idx(index)).map(|e| e.deadline) else {
+        let Some(entry) = self.entries.get(idx(index)) else {
             return;
         };
-        let slot = self.slot_for(deadline);
-        let tail = self.tails.get(slot).copied().unwrap_or(NIL);
+        let slot = self.slot_for(entry.deadline);
+        let (Some(&tail), Some(head)) = (self.tails.get(slot), self.heads.get_mut(slot)) else {
+            return;
+        };
+        if tail == NIL {
+            *head = index;
+        } else if let Some(t) = self.entries.get_mut(idx(tail)) {
+            t.next = index;
+        }
+        if let Some(t) = self.tails.get_mut(slot) {
+            *t = index;
+        }
         if let Some(e) = self.entries.get_mut(idx(index)) {
             e.prev = tail;
             e.next = NIL;
             e.slot = u16::try_from(slot).unwrap_or(0);
-        }
-        match self.entries.get_mut(idx(tail)) {
-            Some(t) => t.next = index,
-            None => {
-                if let Some(h) = self.heads.get_mut(slot) {
-                    *h = index;
-                }
-            }
-        }
-        if let Some(t) = self.tails.get_mut(slot) {
-            *t = index;
         }
     }
 
@@ -341,10 +345,15 @@ impl<A, const N: usize> TimerQueue<A, N> {
     }
 }
 
+#[inline]
+#[allow(
+    clippy::arithmetic_side_effects,
+    clippy::cast_possible_truncation,
+    reason = "level < LEVELS and the masked value < SLOTS: the slot is below LEVELS * SLOTS"
+)]
 fn level_slot(level: usize, value: u64) -> usize {
     const MASK: u64 = (1 << BITS) - 1;
-    let within = usize::try_from(value & MASK).unwrap_or(0);
-    level.saturating_mul(SLOTS).saturating_add(within)
+    level.min(LEVELS - 1) * SLOTS + (value & MASK) as usize
 }
 
 fn idx(index: u32) -> usize {
