@@ -4,4 +4,5 @@
 
 pub mod autonomous;
 pub mod mailbag;
+pub mod plc;
 pub mod svg;
