@@ -19,7 +19,8 @@ use std::fmt::Write as _;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use regler_scan_cycle::{
-    Breakpoint, Ctu, CycleConfig, Executive, Halt, Io, RTrig, Spool, Sr, TimerQueue, Ton,
+    Breakpoint, Ctu, CycleConfig, DateTime, Executive, Halt, Io, MinuteTable, RTrig, Spool, Sr,
+    Start, TimerQueue, Ton, Weekdays,
 };
 use serde::Serialize;
 
@@ -69,6 +70,15 @@ pub const SIGNALS: [(&str, bool, usize); 9] = [
     ("run", false, output::RUN),
 ];
 
+/// A one-shot job for the reserve: a printout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Report {
+    /// Every tenth part: the batch count.
+    Batch(u32),
+    /// A shift change from the minute table: the hour.
+    Shift(u8),
+}
+
 /// Actions in the timer register.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum GateAction {
@@ -86,8 +96,8 @@ pub struct Conveyor {
     bad_edge: RTrig,
     timers: TimerQueue<GateAction, 64>,
     gate: bool,
-    /// Batch reports waiting for the reserve.
-    pub spool: Spool<u32, 8>,
+    /// Reports waiting for the reserve.
+    pub spool: Spool<Report, 8>,
     /// Reports refused by a full spool.
     pub spool_refused: u32,
 }
@@ -152,7 +162,11 @@ impl Conveyor {
             .call(i.get(input::START) && !jammed, i.get(input::STOP) || jammed);
         if self.part_edge.call(part) {
             self.parts.call(true, false);
-            if self.parts.cv() % 10 == 0 && self.spool.push(self.parts.cv().unsigned_abs()).is_err()
+            if self.parts.cv() % 10 == 0
+                && self
+                    .spool
+                    .push(Report::Batch(self.parts.cv().unsigned_abs()))
+                    .is_err()
             {
                 self.spool_refused += 1;
             }
@@ -382,8 +396,12 @@ pub struct Simulator {
     pub breakpoints: Vec<Breakpoint>,
     /// The timing diagram.
     pub trace: Vec<Sample>,
-    /// Batch reports run in the reserve.
-    pub reports: Vec<u32>,
+    /// Reports run in the reserve.
+    pub reports: Vec<Report>,
+    /// The calendar clock, advanced by the cycle.
+    pub clock: DateTime,
+    /// Shift changes: programs started at given minutes.
+    pub table: MinuteTable<Report, 4>,
 }
 
 impl Simulator {
@@ -399,6 +417,16 @@ impl Simulator {
         let _ = plc.conditioning_mut().set_debounce(input::PART, 2);
         // The quality sensor's pulse can be shorter than a cycle: latch it.
         let _ = plc.conditioning_mut().set_latched(input::BAD, true);
+        // Shift reports at the shift changes, as the 1977 plant printed statistics at 24:00.
+        let mut table = MinuteTable::new();
+        for hour in [6, 14, 22] {
+            let _ = table.add(Start {
+                hour,
+                minute: 0,
+                days: Weekdays::ALL,
+                program: Report::Shift(hour),
+            });
+        }
         Simulator {
             plc,
             program: Conveyor::new(),
@@ -406,6 +434,8 @@ impl Simulator {
             breakpoints: Vec::new(),
             trace: Vec::new(),
             reports: Vec::new(),
+            clock: DateTime::new(2026, 11, 23, 13, 58, 30).unwrap_or_else(|_| unreachable!()),
+            table,
         }
     }
 
@@ -419,6 +449,14 @@ impl Simulator {
                 return (done, Some(halt));
             }
             done += 1;
+            // The clock, and the minute table at each whole minute.
+            if self.clock.advance(PERIOD_MS) > 0 {
+                for report in self.table.due(&self.clock) {
+                    if self.program.spool.push(*report).is_err() {
+                        self.program.spool_refused += 1;
+                    }
+                }
+            }
             // Level C: the reserve runs the spool.
             let reports = &mut self.reports;
             self.plc
@@ -541,7 +579,7 @@ impl Simulator {
                     .program
                     .spool
                     .iter()
-                    .map(|b| format!("report@{b}"))
+                    .map(|r| format!("{r:?}"))
                     .collect();
                 let _ = writeln!(
                     out,
@@ -565,7 +603,7 @@ impl Simulator {
     /// The I/O images with forced points marked.
     #[must_use]
     pub fn show(&self) -> String {
-        let mut s = format!("cycle {}\n", self.plc.cycle_count());
+        let mut s = format!("cycle {}  {}\n", self.plc.cycle_count(), self.clock);
         for &(name, input, p) in &SIGNALS {
             let (value, forced) = if input {
                 (self.plc.inputs().get(p), self.plc.forced_inputs().forced(p))
@@ -650,7 +688,11 @@ mod tests {
         assert!(t.bad_rejected > 5 && t.bad_passed <= t.jams, "{t:?}");
         assert!(t.good_rejected <= t.jams, "{t:?}");
         assert_eq!(t.cleared_by_hand, t.jams);
-        assert!(!sim.reports.is_empty());
+        assert!(sim.reports.iter().any(|r| matches!(r, Report::Batch(_))));
+        assert!(
+            sim.reports.contains(&Report::Shift(14)),
+            "the 14:00 shift report ran"
+        );
         assert!(sim.plc.stats().overruns == 0);
     }
 

@@ -531,6 +531,87 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
     }
 }
 
+/// A test of level B: a condition on the images.
+pub type Condition<const IW: usize, const OW: usize> = fn(&Scan<'_, IW, OW>) -> bool;
+/// A routine of level B: runs when its condition holds, on the images and the program's state.
+pub type Routine<C, const IW: usize, const OW: usize> = fn(&mut Scan<'_, IW, OW>, &mut C);
+
+/// The 1977 plant's level B: the program as a long chain of tests on the registered inputs, each
+/// positive test calling its routine, in order. Steps are plain function pointers in a fixed
+/// array of `N`; `C` is the program's own state (its timers, counters, data lists).
+///
+/// ```
+/// use regler_scan_cycle::{CycleConfig, Executive, Io, StepChain};
+/// struct Plant([u16; 1], [u16; 1]);
+/// impl Io<1, 1> for Plant {
+///     fn read_inputs(&mut self, raw: &mut [u16; 1]) { *raw = self.0; }
+///     fn write_outputs(&mut self, out: &[u16; 1]) { self.1 = *out; }
+///     fn now_us(&mut self) -> u32 { 0 }
+/// }
+/// struct Counts { trolleys: u32 }
+/// let mut chain: StepChain<Counts, 1, 1, 4> = StepChain::new();
+/// chain.push(|s| s.inputs.get(0), |s, c| { c.trolleys += 1; s.outputs.set(0, true).ok(); }).ok();
+/// chain.push(|s| !s.inputs.get(0), |s, _| { s.outputs.set(0, false).ok(); }).ok();
+/// let (mut plant, mut counts) = (Plant([1], [0]), Counts { trolleys: 0 });
+/// let mut plc: Executive<1, 1> = Executive::new(CycleConfig::source());
+/// plc.cycle(&mut plant, |scan| chain.run(scan, &mut counts)).unwrap();
+/// assert_eq!((plant.1, counts.trolleys), ([1], 1));
+/// ```
+pub struct StepChain<C, const IW: usize, const OW: usize, const N: usize> {
+    steps: heapless::Vec<(Condition<IW, OW>, Routine<C, IW, OW>), N>,
+}
+
+impl<C, const IW: usize, const OW: usize, const N: usize> Default for StepChain<C, IW, OW, N> {
+    fn default() -> Self {
+        StepChain::new()
+    }
+}
+
+impl<C, const IW: usize, const OW: usize, const N: usize> StepChain<C, IW, OW, N> {
+    /// An empty chain.
+    #[must_use]
+    pub const fn new() -> Self {
+        StepChain {
+            steps: heapless::Vec::new(),
+        }
+    }
+
+    /// Appends a step; a full chain hands it back.
+    #[allow(
+        clippy::type_complexity,
+        reason = "the step handed back is the pair given"
+    )]
+    pub fn push(
+        &mut self,
+        condition: Condition<IW, OW>,
+        routine: Routine<C, IW, OW>,
+    ) -> Result<(), (Condition<IW, OW>, Routine<C, IW, OW>)> {
+        self.steps.push((condition, routine))
+    }
+
+    /// Runs the chain once: every step whose condition holds (tested when its turn comes, so a
+    /// routine's outputs are visible to the tests after it) calls its routine.
+    pub fn run(&self, scan: &mut Scan<'_, IW, OW>, state: &mut C) {
+        for (condition, routine) in &self.steps {
+            if condition(scan) {
+                routine(scan, state);
+            }
+        }
+    }
+
+    /// Steps in the chain.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.steps.len()
+    }
+
+    /// Whether the chain has no step.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.steps.is_empty()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

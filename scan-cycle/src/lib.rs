@@ -19,6 +19,9 @@ mod timer_queue;
 
 pub use blocks::{Ctd, Ctu, Ctud, FTrig, RTrig, Rs, Sr, Tof, Ton, Tp};
 pub use calendar::{DateTime, InvalidDateTime, MinuteTable, Start, Weekdays};
-pub use executive::{Breakpoint, CycleConfig, CycleStats, Executive, Halt, Io, Scan, Spool};
+pub use executive::{
+    Breakpoint, Condition, CycleConfig, CycleStats, Executive, Halt, Io, Routine, Scan, Spool,
+    StepChain,
+};
 pub use image::{Conditioning, DebounceError, Forcing, Image, POINTS_PER_WORD, PointError};
 pub use timer_queue::{QueueFull, TimerId, TimerQueue, UnknownTimer};

@@ -141,3 +141,92 @@ proptest! {
         }
     }
 }
+
+mod images {
+    use proptest::prelude::{any, prop, prop_assert_eq, proptest};
+    use regler_scan_cycle::{CycleConfig, Executive, Io};
+
+    struct Raw {
+        inputs: [u16; 2],
+        outputs: [u16; 2],
+    }
+    impl Io<2, 2> for Raw {
+        fn read_inputs(&mut self, raw: &mut [u16; 2]) {
+            *raw = self.inputs;
+        }
+        fn write_outputs(&mut self, out: &[u16; 2]) {
+            self.outputs = *out;
+        }
+        fn now_us(&mut self) -> u32 {
+            0
+        }
+    }
+
+    #[derive(Clone, Debug)]
+    enum Op {
+        ForceIn(usize, bool),
+        UnforceIn(usize),
+        ForceOut(usize, bool),
+        UnforceOut(usize),
+        Cycle([u16; 2], [u16; 2]),
+    }
+
+    fn op() -> impl proptest::strategy::Strategy<Value = Op> {
+        use proptest::strategy::Strategy;
+        proptest::prop_oneof![
+            1 => (0usize..40, any::<bool>()).prop_map(|(p, v)| Op::ForceIn(p, v)),
+            1 => (0usize..40).prop_map(Op::UnforceIn),
+            1 => (0usize..40, any::<bool>()).prop_map(|(p, v)| Op::ForceOut(p, v)),
+            1 => (0usize..40).prop_map(Op::UnforceOut),
+            3 => (any::<[u16; 2]>(), any::<[u16; 2]>()).prop_map(|(i, o)| Op::Cycle(i, o)),
+        ]
+    }
+
+    proptest! {
+        /// Images and forcing against a model kept point by point: the program sees the raw
+        /// inputs with forced points replaced, and the plant gets the program's outputs with
+        /// forced points replaced; points outside the images are refused.
+        #[test]
+        fn images_and_forcing_match_a_model(ops in prop::collection::vec(op(), 1..60)) {
+            let mut plc: Executive<2, 2> = Executive::new(CycleConfig::source());
+            let mut io = Raw { inputs: [0; 2], outputs: [0; 2] };
+            let (mut fin, mut fout): ([Option<bool>; 32], [Option<bool>; 32]) = ([None; 32], [None; 32]);
+            for op in ops {
+                match op {
+                    Op::ForceIn(p, v) => {
+                        prop_assert_eq!(plc.force_input(p, v).is_ok(), p < 32);
+                        if p < 32 { fin[p] = Some(v); }
+                    }
+                    Op::UnforceIn(p) => {
+                        prop_assert_eq!(plc.unforce_input(p).is_ok(), p < 32);
+                        if p < 32 { fin[p] = None; }
+                    }
+                    Op::ForceOut(p, v) => {
+                        prop_assert_eq!(plc.force_output(p, v).is_ok(), p < 32);
+                        if p < 32 { fout[p] = Some(v); }
+                    }
+                    Op::UnforceOut(p) => {
+                        prop_assert_eq!(plc.unforce_output(p).is_ok(), p < 32);
+                        if p < 32 { fout[p] = None; }
+                    }
+                    Op::Cycle(raw, program_out) => {
+                        io.inputs = raw;
+                        let mut seen = [false; 32];
+                        plc.cycle(&mut io, |s| {
+                            for (p, b) in seen.iter_mut().enumerate() { *b = s.inputs.get(p); }
+                            *s.outputs.words_mut() = program_out;
+                        }).unwrap();
+                        for p in 0..32 {
+                            let raw_bit = raw[p / 16] >> (p % 16) & 1 == 1;
+                            prop_assert_eq!(seen[p], fin[p].unwrap_or(raw_bit));
+                            let prog_bit = program_out[p / 16] >> (p % 16) & 1 == 1;
+                            let written = io.outputs[p / 16] >> (p % 16) & 1 == 1;
+                            prop_assert_eq!(written, fout[p].unwrap_or(prog_bit));
+                            prop_assert_eq!(plc.forced_outputs().forced(p), fout[p]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
