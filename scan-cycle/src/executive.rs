@@ -513,21 +513,40 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         io: &mut I,
         cycles: u64,
         breakpoints: &[Breakpoint],
+        program: P,
+        between: impl FnMut(&mut Self, &mut I),
+    ) -> (u64, Option<Halt>) {
+        let (done, halt, _) = self.run_until(io, cycles, breakpoints, program, between, |_| false);
+        (done, halt)
+    }
+
+    /// [`run`](Executive::run) with a condition breakpoint as well: `stop` is asked after every
+    /// cycle (with the images and statistics in reach) and ends the run when it says so. The
+    /// third value tells whether `stop` ended it.
+    pub fn run_until<I: Io<IW, OW>, P: FnMut(&mut Scan<'_, IW, OW>)>(
+        &mut self,
+        io: &mut I,
+        cycles: u64,
+        breakpoints: &[Breakpoint],
         mut program: P,
         mut between: impl FnMut(&mut Self, &mut I),
-    ) -> (u64, Option<Halt>) {
+        mut stop: impl FnMut(&Self) -> bool,
+    ) -> (u64, Option<Halt>, bool) {
         let mut done = 0u64;
         while done < cycles {
             if let Err(halt) = self.cycle(io, &mut program) {
-                return (done, Some(halt));
+                return (done, Some(halt), false);
             }
             done = done.saturating_add(1);
             between(self, io);
             if let Some(&b) = breakpoints.iter().find(|b| self.reached(**b)) {
-                return (done, Some(Halt::Breakpoint(b)));
+                return (done, Some(Halt::Breakpoint(b)), false);
+            }
+            if stop(self) {
+                return (done, None, true);
             }
         }
-        (done, None)
+        (done, None, false)
     }
 }
 
@@ -785,5 +804,20 @@ mod tests {
         );
         let (n, why) = plc.run(&mut io, 3, &[], program, |_, _| {});
         assert_eq!((n, why), (3, None));
+        // A condition breakpoint: both outputs 0 and 2 on.
+        let both = |s: &mut Scan<'_, 2, 1>| {
+            s.outputs.set(0, s.cycle.is_multiple_of(2)).unwrap();
+            s.outputs.set(2, s.cycle.is_multiple_of(5)).unwrap();
+        };
+        let (_, why, by_condition) = plc.run_until(
+            &mut io,
+            100,
+            &[],
+            both,
+            |_, _| {},
+            |p| p.outputs().get(0) && p.outputs().get(2),
+        );
+        assert!(by_condition && why.is_none());
+        assert!(plc.cycle_count().is_multiple_of(10));
     }
 }
