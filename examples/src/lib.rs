@@ -6,3 +6,16 @@ pub mod autonomous;
 pub mod mailbag;
 pub mod plc;
 pub mod svg;
+
+/// The end of every example's `main`: success, or the error on stderr (prefixed with the
+/// program's name) and exit code 2, never a panic.
+#[must_use]
+pub fn finish(program: &str, result: Result<(), String>) -> std::process::ExitCode {
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("{program}: {e}");
+            std::process::ExitCode::from(2)
+        }
+    }
+}

@@ -359,6 +359,8 @@ pub struct ScenarioReport {
     pub tip_error: TipError,
     /// Year by year.
     pub years: Vec<YearReport>,
+    /// Tip-position error over `CURVE_POINTS` equal stretches of the run, for the picture.
+    pub curve: Vec<CurvePoint>,
     /// Recalibrations of the trackers (all docks).
     pub recalibrations: u64,
 }
@@ -410,8 +412,21 @@ pub struct Report {
     pub stretch: StretchReport,
 }
 
+/// Points in each scenario's tip-error curve.
+pub const CURVE_POINTS: usize = 20;
+
+/// Tip-position error over one stretch of the run.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct CurvePoint {
+    /// End of the stretch, years from the start.
+    pub years: f64,
+    /// The error in that stretch.
+    pub tip_error: TipError,
+}
+
 struct DockResult {
     years: Vec<YearReport>,
+    curve: Vec<TipError>,
     recalibrations: u64,
     health: ReaderHealth<1000>,
     meter: StretchMeter,
@@ -425,6 +440,12 @@ pub fn run(config: &Config, mut progress: impl FnMut(u64)) -> Result<Report, Str
     let mut stretch = None;
     for scenario in SCENARIOS {
         let mut years: Vec<YearReport> = Vec::new();
+        let mut curve: Vec<CurvePoint> = (1..=CURVE_POINTS)
+            .map(|i| CurvePoint {
+                years: config.years * i as f64 / CURVE_POINTS as f64,
+                ..CurvePoint::default()
+            })
+            .collect();
         let mut recalibrations = 0;
         for dock in 0..config.docks {
             let result = run_dock(config, scenario, dock, &mut progress)?;
@@ -438,6 +459,9 @@ pub fn run(config: &Config, mut progress: impl FnMut(u64)) -> Result<Report, Str
                 }
                 years[i].outcomes.add(&y.outcomes);
                 years[i].tip_error.merge(&y.tip_error);
+            }
+            for (point, e) in curve.iter_mut().zip(&result.curve) {
+                point.tip_error.merge(e);
             }
             if scenario.voting && scenario.correction {
                 let h = result.health.totals();
@@ -481,6 +505,7 @@ pub fn run(config: &Config, mut progress: impl FnMut(u64)) -> Result<Report, Str
             tip_error,
             years,
             recalibrations,
+            curve,
         });
     }
     let stretch = stretch.ok_or("no dock was simulated")?;
@@ -546,6 +571,7 @@ fn run_dock(
     let mut on_chain: Vec<Option<Carried>> = vec![None; ring_len];
     let mut set = vec![false; usize::from(config.bins)];
     let mut years: Vec<YearReport> = Vec::new();
+    let mut curve = vec![TipError::default(); CURVE_POINTS];
     let mut recalibrations = 0;
     let mut next_entry = 0u64;
     let mut events: Vec<TipperEvent<Tag>> = Vec::new();
@@ -576,6 +602,11 @@ fn run_dock(
                     let travelled_m = (pulse - entered) as f64 * pitch;
                     let meant_m = bins[tipper] - f64::from(LEAD_PULSES) * p0;
                     years[year].tip_error.record(travelled_m - meant_m);
+                    let bin = (pulse.saturating_sub(1) as usize * CURVE_POINTS)
+                        / pulses_total.max(1) as usize;
+                    if let Some(e) = curve.get_mut(bin) {
+                        e.record(travelled_m - meant_m);
+                    }
                 }
                 TipperEvent::Reset { tipper } => set[tipper] = false,
             }
@@ -684,6 +715,7 @@ fn run_dock(
     progress(pulses_total % 65_536);
     Ok(DockResult {
         years,
+        curve,
         recalibrations,
         health,
         meter,

@@ -65,17 +65,9 @@ pub fn line_chart_marked(
     let sx = |x: f64| LEFT + pw * x / x_max;
     let sy = |y: f64| TOP + ph * (1.0 - y / y_max);
     let mut svg = header(title);
+    horizontal_grid(&mut svg, y_max);
     for i in 0..=5 {
-        let (fx, fy) = (x_max * f64::from(i) / 5.0, y_max * f64::from(i) / 5.0);
-        let _ = writeln!(
-            svg,
-            r##"<line x1="{LEFT}" x2="{:.1}" y1="{y:.1}" y2="{y:.1}" stroke="#ddd"/><text x="{:.1}" y="{:.1}" text-anchor="end">{}</text>"##,
-            LEFT + pw,
-            LEFT - 6.0,
-            sy(fy) + 4.0,
-            trim(fy),
-            y = sy(fy)
-        );
+        let fx = x_max * f64::from(i) / 5.0;
         let _ = writeln!(
             svg,
             r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">{}</text>"#,
@@ -146,18 +138,7 @@ pub fn bar_chart(
     let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
     let sy = |y: f64| TOP + ph * (1.0 - y / y_max);
     let mut svg = header(title);
-    for i in 0..=5 {
-        let fy = y_max * f64::from(i) / 5.0;
-        let _ = writeln!(
-            svg,
-            r##"<line x1="{LEFT}" x2="{:.1}" y1="{y:.1}" y2="{y:.1}" stroke="#ddd"/><text x="{:.1}" y="{:.1}" text-anchor="end">{}</text>"##,
-            LEFT + pw,
-            LEFT - 6.0,
-            sy(fy) + 4.0,
-            trim(fy),
-            y = sy(fy)
-        );
-    }
+    horizontal_grid(&mut svg, y_max);
     axes(&mut svg, "", y_label);
     let group_w = pw / categories.len().max(1) as f64;
     let bar_w = group_w * 0.8 / series.len().max(1) as f64;
@@ -188,6 +169,23 @@ pub fn bar_chart(
     }
     svg.push_str("</svg>\n");
     svg
+}
+
+/// Five horizontal grid lines with their values, 0 to `y_max`.
+fn horizontal_grid(svg: &mut String, y_max: f64) {
+    let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
+    for i in 0..=5 {
+        let fy = y_max * f64::from(i) / 5.0;
+        let y = TOP + ph * (1.0 - fy / y_max);
+        let _ = writeln!(
+            svg,
+            r##"<line x1="{LEFT}" x2="{:.1}" y1="{y:.1}" y2="{y:.1}" stroke="#ddd"/><text x="{:.1}" y="{:.1}" text-anchor="end">{}</text>"##,
+            LEFT + pw,
+            LEFT - 6.0,
+            y + 4.0,
+            trim(fy),
+        );
+    }
 }
 
 fn header(title: &str) -> String {

@@ -80,14 +80,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
-    match run(&args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("autonomous-controller: {e}");
-            ExitCode::from(2)
-        }
-    }
+    regler_examples::finish("autonomous-controller", run(&Args::parse()))
 }
 
 fn run(args: &Args) -> Result<(), String> {

@@ -105,14 +105,7 @@ impl Args {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
-    match run(&args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("mailbag-sorter: {e}");
-            ExitCode::from(2)
-        }
-    }
+    regler_examples::finish("mailbag-sorter", run(&Args::parse()))
 }
 
 fn run(args: &Args) -> Result<(), String> {
@@ -247,40 +240,27 @@ fn summary(r: &Report) -> String {
 
 fn picture(r: &Report) -> String {
     let colours = ["#c0392b", "#2471a3"];
+    // Mean (solid) then maximum (dashed), without and with correction (the voting runs), over
+    // twenty stretches of the run.
     let mut series = Vec::new();
-    for (sc, colour) in r.scenarios[2..].iter().zip(colours) {
-        let label = if sc.scenario.correction {
-            "with correction"
-        } else {
-            "no correction"
-        };
-        series.push(Series {
-            label,
-            colour,
-            dashed: false,
-            points: sc
-                .years
-                .iter()
-                .map(|y| (f64::from(y.year), y.tip_error.mean_abs_m))
-                .collect(),
-        });
-    }
-    for (sc, colour) in r.scenarios[2..].iter().zip(colours) {
-        let label = if sc.scenario.correction {
-            "max, with"
-        } else {
-            "max, without"
-        };
-        series.push(Series {
-            label,
-            colour,
-            dashed: true,
-            points: sc
-                .years
-                .iter()
-                .map(|y| (f64::from(y.year), y.tip_error.max_abs_m))
-                .collect(),
-        });
+    for (dashed, labels) in [
+        (false, ["no correction", "with correction"]),
+        (true, ["max, without", "max, with"]),
+    ] {
+        for (sc, colour) in r.scenarios[2..].iter().zip(colours) {
+            let stat = |e: &mailbag::TipError| if dashed { e.max_abs_m } else { e.mean_abs_m };
+            series.push(Series {
+                label: labels[usize::from(sc.scenario.correction)],
+                colour,
+                dashed,
+                points: sc
+                    .curve
+                    .iter()
+                    .filter(|c| c.tip_error.count > 0)
+                    .map(|c| (c.years, stat(&c.tip_error)))
+                    .collect(),
+            });
+        }
     }
     let lines = svg::line_chart(
         "Tip-position error as the chain stretches",

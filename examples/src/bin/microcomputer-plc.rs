@@ -82,14 +82,7 @@ struct Summary {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
-    match run(&args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("microcomputer-plc: {e}");
-            ExitCode::from(2)
-        }
-    }
+    regler_examples::finish("microcomputer-plc", run(&Args::parse()))
 }
 
 fn run(args: &Args) -> Result<(), String> {
