@@ -21,6 +21,3 @@ pub use tracker::{
     EnterError, HeldTipper, InFlight, SOURCE_HOLD_PULSES, Snapshot, TipperEvent, Tracker,
     TrackerError,
 };
-
-#[cfg(test)]
-mod tests;

@@ -229,14 +229,14 @@ impl core::error::Error for EditError {}
 /// use regler_pid::{Code, Config, OperatorLimits, Parameters, Scaling, Staged};
 /// let scaling = Scaling::new(0.0, 200.0)?;
 /// let active = Parameters { config: Config::default(), setpoint: 100.0, rfel: 10.0, night_setback: 0.0 };
-/// let mut staged = Staged::new(active, scaling, OperatorLimits::default()).unwrap();
-/// staged.edit(Code::Win, 150.0).unwrap();               // * 21 * A 150 A
+/// let mut staged = Staged::new(active, scaling, OperatorLimits::default())?;
+/// staged.edit(Code::Win, 150.0)?;                        // * 21 * A 150 A
 /// assert_eq!(staged.active().setpoint, 100.0);          // still running on the old set
 /// assert!(staged.edit(Code::Win, 250.0).is_err());       // ILLEGAL VALUE: above SCALEMAX
 /// assert!(staged.edit(Code::Y, 1.0).is_err());           // read only
 /// staged.commit();                                       // key D
 /// assert_eq!(staged.take_commit().map(|p| p.setpoint), Some(150.0));
-/// # Ok::<(), regler_pid::ScalingError>(())
+/// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Staged {
@@ -448,17 +448,17 @@ fn value_of(p: &Parameters, code: Code) -> Option<f64> {
 /// ```
 /// use regler_pid::{AlarmState, Code, Config, OperatorLimits, Parameters, Scaling, Station};
 /// let params = Parameters { config: Config::default(), setpoint: 20.0, rfel: 2.0, night_setback: 0.0 };
-/// let mut station = Station::<f32>::new(params, Scaling::new(0.0, 40.0)?, OperatorLimits::default()).unwrap();
+/// let mut station = Station::<f32>::new(params, Scaling::new(0.0, 40.0)?, OperatorLimits::default())?;
 /// let y = station.sample(15.0);               // 5 degrees below: an alarm, and heat
 /// assert!(y > 0.0);
 /// assert_eq!(station.alarm().state(), AlarmState::Blinking);
 /// station.acknowledge();                      // key C
 /// assert_eq!(station.alarm().state(), AlarmState::Steady);
-/// station.staged_mut().edit(Code::Win, 18.0).unwrap();
+/// station.staged_mut().edit(Code::Win, 18.0)?;
 /// station.staged_mut().commit();
 /// station.sample(17.0);                       // the new set-point is in force from here
 /// assert_eq!(station.value(Code::Win), Some(18.0));
-/// # Ok::<(), regler_pid::ScalingError>(())
+/// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Clone, Debug)]
 pub struct Station<T> {

@@ -261,8 +261,8 @@ pub struct Start<P> {
 /// ```
 /// use regler_scan_cycle::{DateTime, MinuteTable, Start, Weekdays};
 /// let mut table: MinuteTable<&str, 8> = MinuteTable::new();
-/// table.add(Start { hour: 6, minute: 0, days: Weekdays::WORKDAYS, program: "morning schedule" }).unwrap();
-/// table.add(Start { hour: 0, minute: 0, days: Weekdays::ALL, program: "print statistics" }).unwrap();
+/// assert!(table.add(Start { hour: 6, minute: 0, days: Weekdays::WORKDAYS, program: "morning schedule" }).is_ok());
+/// assert!(table.add(Start { hour: 0, minute: 0, days: Weekdays::ALL, program: "print statistics" }).is_ok());
 /// let mut clock = DateTime::new(2026, 11, 23, 5, 59, 30)?; // a Monday
 /// assert_eq!(clock.advance(30_000), 1);                     // 06:00:00
 /// assert_eq!(table.due(&clock).collect::<Vec<_>>(), [&"morning schedule"]);

@@ -142,8 +142,8 @@ impl CycleStats {
 /// ```
 /// use regler_scan_cycle::Spool;
 /// let mut spool: Spool<&str, 2> = Spool::new();
-/// spool.push("print shift report").unwrap();
-/// spool.push("archive counters").unwrap();
+/// assert!(spool.push("print shift report").is_ok());
+/// assert!(spool.push("archive counters").is_ok());
 /// assert_eq!(spool.push("one too many"), Err("one too many")); // handed back
 /// ```
 #[derive(Clone, Debug)]
@@ -573,8 +573,9 @@ pub type Routine<C, const IW: usize, const OW: usize> = fn(&mut Scan<'_, IW, OW>
 /// chain.push(|s| !s.inputs.get(0), |s, _| { s.outputs.set(0, false).ok(); }).ok();
 /// let (mut plant, mut counts) = (Plant([1], [0]), Counts { trolleys: 0 });
 /// let mut plc: Executive<1, 1> = Executive::new(CycleConfig::source());
-/// plc.cycle(&mut plant, |scan| chain.run(scan, &mut counts)).unwrap();
+/// plc.cycle(&mut plant, |scan| chain.run(scan, &mut counts))?;
 /// assert_eq!((plant.1, counts.trolleys), ([1], 1));
+/// # Ok::<(), regler_scan_cycle::Halt>(())
 /// ```
 pub struct StepChain<C, const IW: usize, const OW: usize, const N: usize> {
     steps: heapless::Vec<(Condition<IW, OW>, Routine<C, IW, OW>), N>,

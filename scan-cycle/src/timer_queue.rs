@@ -76,15 +76,16 @@ struct Entry<A> {
 /// ```
 /// use regler_scan_cycle::TimerQueue;
 /// let mut timers: TimerQueue<&str, 8> = TimerQueue::new();
-/// let gate = timers.insert(3, "close reject gate").unwrap();
-/// timers.insert(1, "lamp off").unwrap();
+/// let gate = timers.insert(3, "close reject gate")?;
+/// timers.insert(1, "lamp off")?;
 /// let mut fired = Vec::new();
 /// timers.tick(|a| fired.push(a));
 /// assert_eq!(fired, ["lamp off"]);
-/// timers.replace(gate, 1).unwrap(); // sooner
+/// timers.replace(gate, 1)?; // sooner
 /// timers.tick(|a| fired.push(a));
 /// assert_eq!(fired, ["lamp off", "close reject gate"]);
 /// assert!(timers.remove(gate).is_none()); // expired: the handle is stale
+/// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Clone, Debug)]
 pub struct TimerQueue<A, const N: usize> {

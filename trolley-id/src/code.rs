@@ -19,10 +19,11 @@ pub const CODE_MASK: u16 = 0x1FFF;
 ///
 /// ```
 /// use regler_trolley_id::TrolleyId;
-/// let id = TrolleyId::new(1977).unwrap();
+/// let id = TrolleyId::try_from(1977)?;
 /// assert_eq!(id.get(), 1977);
 /// assert!(TrolleyId::new(0).is_none());
 /// assert!(TrolleyId::new(4096).is_none());
+/// # Ok::<(), regler_trolley_id::InvalidTrolleyNumber>(())
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -147,11 +148,12 @@ impl core::error::Error for ReadError {}
 ///
 /// ```
 /// use regler_trolley_id::{decode, encode, ReadError, TrolleyId};
-/// let id = TrolleyId::new(0b1011).unwrap(); // three ones: parity cam set
+/// let id = TrolleyId::try_from(0b1011)?; // three ones: parity cam set
 /// assert_eq!(encode(id), 0b1_0000_0000_1011);
 /// assert_eq!(decode(0b1_0000_0000_1011), Ok(id));
 /// assert_eq!(decode(0b0_0000_0000_1011), Err(ReadError::Parity { raw: 0b1011 }));
 /// assert_eq!(decode(0), Err(ReadError::NoCams));
+/// # Ok::<(), regler_trolley_id::InvalidTrolleyNumber>(())
 /// ```
 pub const fn decode(raw: u16) -> Result<TrolleyId, ReadError> {
     if raw & !CODE_MASK != 0 {

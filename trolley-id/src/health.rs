@@ -124,7 +124,7 @@ pub enum AlarmChange {
 /// let limits = AlarmLimits { no_read_per_mille: 100, disagreement_per_mille: 1000, min_passages: 10 };
 /// let mut health: ReaderHealth<50> = ReaderHealth::new(limits);
 /// let mut voter = Voter::new(Strategy::Consecutive { k: 2 })?;
-/// let good = encode(TrolleyId::new(7).unwrap());
+/// let good = encode(TrolleyId::try_from(7)?);
 /// for _ in 0..9 {
 ///     assert_eq!(health.record(&voter.vote(&[good, good])), None);
 /// }
@@ -133,7 +133,7 @@ pub enum AlarmChange {
 /// assert_eq!(health.record(&voter.vote(&[0x0001])), Some(AlarmChange::Raised));
 /// assert!(health.alarm());
 /// assert_eq!(health.window().no_reads, 2);
-/// # Ok::<(), regler_trolley_id::StrategyError>(())
+/// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Clone, Debug)]
 pub struct ReaderHealth<const W: usize> {

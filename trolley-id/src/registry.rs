@@ -20,17 +20,18 @@ pub const REGISTRY_CELLS: usize = NUMBER_MASK as usize + 1;
 /// ```
 /// use regler_trolley_id::{Registry, Route, RejectReason, TrolleyId, Verdict};
 /// let mut registry: Registry<u8> = Registry::new();
-/// let t = TrolleyId::new(42).unwrap();
+/// let t = TrolleyId::try_from(42)?;
 /// registry.assign(t, 17); // the operator keyed bin 17 at the loading desk
 /// assert_eq!(
 ///     registry.route(&Verdict::Identified(t), |_| true),
 ///     Route::Deliver { trolley: t, destination: 17 }
 /// );
-/// let stranger = TrolleyId::new(43).unwrap();
+/// let stranger = TrolleyId::try_from(43)?;
 /// assert_eq!(
 ///     registry.route(&Verdict::Identified(stranger), |_| true),
 ///     Route::Reject(RejectReason::NoDestination(stranger))
 /// );
+/// # Ok::<(), regler_trolley_id::InvalidTrolleyNumber>(())
 /// ```
 #[derive(Clone, Debug)]
 pub struct Registry<D> {

@@ -165,7 +165,7 @@ pub struct Passage {
 ///
 /// ```
 /// use regler_trolley_id::{encode, Strategy, TrolleyId, Verdict, Voter, NoRead};
-/// let lund = TrolleyId::new(1234).unwrap();
+/// let lund = TrolleyId::try_from(1234)?;
 /// let mut voter = Voter::new(Strategy::Majority { min_samples: 3 })?;
 /// for raw in [encode(lund), encode(lund) ^ 0b11, encode(lund), 0] {
 ///     voter.sample(raw); // one double misread and one empty scan
@@ -180,7 +180,7 @@ pub struct Passage {
 ///     voter.finish().verdict,
 ///     Verdict::NoRead(NoRead::TooFewSamples { got: 1, needed: 3 })
 /// );
-/// # Ok::<(), regler_trolley_id::StrategyError>(())
+/// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Clone, Debug)]
 pub struct Voter {
