@@ -1,0 +1,25 @@
+//! A tracker's snapshot survives a trip through non-volatile memory (here: JSON).
+#![cfg(feature = "serde")]
+#![allow(clippy::unwrap_used, reason = "a test may panic: that is how it fails")]
+
+use regler_chain_tracker::{DistanceTable, Snapshot, Tracker};
+
+#[test]
+fn snapshot_round_trips_through_serde() {
+    let table: DistanceTable<4> = DistanceTable::new(1000, &[10, 20, 30]).unwrap();
+    let mut before: Tracker<u16, 16, 4> = Tracker::new(table.clone(), 6).unwrap();
+    for (i, tipper) in [2, 0, 1, 2].into_iter().enumerate() {
+        before.enter(i as u16 + 100, tipper).unwrap();
+        before.advance(3, |_| {});
+    }
+    before.recalibrate(990).unwrap();
+    let stored = serde_json::to_string(&before.snapshot()).unwrap();
+    let snapshot: Snapshot<u16, 16, 4> = serde_json::from_str(&stored).unwrap();
+    let mut after: Tracker<u16, 16, 4> = Tracker::new(table, 6).unwrap();
+    after.restore(&snapshot).unwrap();
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    before.advance(60, |e| a.push(e));
+    after.advance(60, |e| b.push(e));
+    assert_eq!(a, b);
+    assert_eq!(a.len(), 8, "four sets and four resets");
+}
