@@ -101,6 +101,9 @@ pub struct Config {
     pub mean_gap_pulses: u32,
     /// Chance that a DIA measurement is off by one pulse.
     pub glitch_rate: f64,
+    /// Reader alarm: passages with two different numbers decoded, per thousand over the last
+    /// 1000 passages, above which a reader's alarm goes on.
+    pub alarm_disagreement_per_mille: u32,
     /// DIA measurements per year: one per chain revolution in the real plant (an 800 m loop
     /// at 0.5 m/s for 16 hours a day makes about 13 000). The simulation compresses time, so it
     /// spaces the measurements by simulated traffic, not by revolutions.
@@ -124,6 +127,7 @@ impl Default for Config {
             strategy: Strategy::Majority { min_samples: 3 },
             mean_gap_pulses: 15,
             glitch_rate: 0.02,
+            alarm_disagreement_per_mille: 4,
             measurements_per_year: 10_000,
         }
     }
@@ -546,7 +550,10 @@ fn run_dock(
         Box::new(Tracker::new(table, SOURCE_HOLD_PULSES).map_err(|e| e.to_string())?);
     let mut meter = StretchMeter::new(StretchConfig::new(sia)).map_err(|e| e.to_string())?;
     let mut voter = Voter::new(config.strategy).map_err(|e| e.to_string())?;
-    let mut health: ReaderHealth<1000> = ReaderHealth::new(AlarmLimits::default());
+    let mut health: ReaderHealth<1000> = ReaderHealth::new(AlarmLimits {
+        disagreement_per_mille: config.alarm_disagreement_per_mille,
+        ..AlarmLimits::default()
+    });
 
     // Every trolley in the plant has a destination somewhere: the registry the readers share.
     let mut registry: Registry<Destination> = Registry::new();

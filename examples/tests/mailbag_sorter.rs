@@ -146,4 +146,7 @@ fn voting_cuts_misdeliveries_by_orders_of_magnitude() {
     assert!(parity >= 100, "parity only misdelivered {parity}");
     assert!(voting * 30 <= parity, "voting {voting} vs parity {parity}");
     assert!(report.scenarios[3].outcomes.rejected < report.scenarios[1].outcomes.rejected);
+    // Reader health finds the bad reader: the worst raises more alarms than the best.
+    let alarms: Vec<u32> = report.readers.iter().map(|r| r.alarms_raised).collect();
+    assert!(alarms[2] > alarms[0], "{alarms:?}");
 }

@@ -65,6 +65,10 @@ struct Args {
     /// Chance that a stretch measurement is off by one pulse.
     #[arg(long, default_value_t = 0.02)]
     glitch_rate: f64,
+    /// Reader health alarm: disagreements per thousand passages (last 1000) above which a
+    /// reader's alarm goes on.
+    #[arg(long, default_value_t = 4)]
+    reader_alarm_per_mille: u32,
     /// Print the results as JSON on stdout instead of the summary.
     #[arg(long)]
     json: bool,
@@ -99,6 +103,7 @@ impl Args {
                 StrategyArg::Consecutive => Strategy::Consecutive { k: self.vote_k },
             },
             glitch_rate: self.glitch_rate,
+            alarm_disagreement_per_mille: self.reader_alarm_per_mille,
             ..Config::default()
         }
     }
