@@ -30,7 +30,8 @@ pub trait Scalar: Copy + PartialOrd + core::fmt::Debug {
     fn both_finite(a: Self, b: Self) -> bool {
         a.is_finite() && b.is_finite()
     }
-    /// Zero for a magnitude so small that products of it would go subnormal (floats only).
+    /// Zero for a magnitude so small that products of it would go subnormal (floats only:
+    /// below 1e-30 for `f32`, 1e-290 for `f64`).
     /// Subnormal arithmetic costs about a hundred cycles on common CPUs; a decaying filter
     /// state would otherwise slow the controller twenty-fold once the loop has settled.
     #[inline(always)]
@@ -53,7 +54,7 @@ pub trait Scalar: Copy + PartialOrd + core::fmt::Debug {
 }
 
 macro_rules! float_scalar {
-    ($t:ty) => {
+    ($t:ty, $tiny:expr) => {
         impl Scalar for $t {
             const ZERO: $t = 0.0;
             const MAX: $t = <$t>::MAX;
@@ -85,7 +86,7 @@ macro_rules! float_scalar {
             }
             #[inline(always)]
             fn flush_tiny(self) -> $t {
-                if self.abs() < 1e-30 { 0.0 } else { self }
+                if self.abs() < $tiny { 0.0 } else { self }
             }
             /// x − x is 0 for a finite x and NaN otherwise: three flops and one compare.
             #[inline(always)]
@@ -97,8 +98,10 @@ macro_rules! float_scalar {
     };
 }
 
-float_scalar!(f32);
-float_scalar!(f64);
+// Well above the smallest normal (1.2e-38 and 2.2e-308) so that one multiply by a filter
+// coefficient cannot go subnormal, far below any value a controller works with.
+float_scalar!(f32, 1e-30);
+float_scalar!(f64, 1e-290);
 
 #[cfg(feature = "fixed")]
 macro_rules! fixed_scalar {
