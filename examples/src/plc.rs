@@ -367,7 +367,7 @@ impl Io<IW, OW> for Plant {
         self.outputs = *outputs;
     }
     fn now_us(&mut self) -> u32 {
-        // A busy time of 2 ms per cycle: the simulated CPU's work.
+        // Each clock read costs the simulated CPU 1 ms, so a cycle (two reads) is busy 1 ms.
         self.clock_us += 1_000;
         (self.clock_us & u64::from(u32::MAX)) as u32
     }
