@@ -31,7 +31,8 @@ pub struct Scan<'a, const IW: usize, const OW: usize> {
     pub outputs: &'a mut Image<OW>,
     /// The cycle's number, from 1.
     pub cycle: u64,
-    /// Milliseconds at the cycle's start (wrapping), for the timers.
+    /// Milliseconds at the cycle's start, for the timers: the executive's own clock, advanced by
+    /// the `Io` clock between cycles and wrapping at 2³² ms.
     pub now_ms: u32,
 }
 
@@ -240,6 +241,11 @@ pub struct Executive<const IW: usize, const OW: usize> {
     state: State,
     cycle: u64,
     last_start_us: Option<u32>,
+    /// The program's millisecond clock: wraps at 2³² ms like the IEC timers expect (the µs
+    /// clock of `Io` wraps every 71.6 minutes, so `now_us / 1000` would jump back).
+    clock_ms: u32,
+    clock_rest_us: u32,
+    clock_last_us: Option<u32>,
     last_end_us: Option<u32>,
     watchdog_trips: u32,
 }
@@ -272,6 +278,9 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
             last_start_us: None,
             last_end_us: None,
             watchdog_trips: 0,
+            clock_ms: 0,
+            clock_rest_us: 0,
+            clock_last_us: None,
         }
     }
 
@@ -299,7 +308,7 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         // Level B: the program, on the images only.
         self.next = self.previous;
         self.cycle = self.cycle.saturating_add(1);
-        let now_ms = start / 1000;
+        let now_ms = self.tick_clock(start);
         program(&mut Scan {
             inputs: &self.inputs,
             previous: &self.previous,
@@ -325,6 +334,26 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
             s.overruns = s.overruns.saturating_add(1);
         }
         Ok(())
+    }
+
+    /// Advances the program's millisecond clock by the µs elapsed since the last cycle.
+    fn tick_clock(&mut self, now_us: u32) -> u32 {
+        if let Some(last) = self.clock_last_us {
+            let total =
+                u64::from(self.clock_rest_us).saturating_add(u64::from(now_us.wrapping_sub(last)));
+            let ms = u32::try_from(total / 1000).unwrap_or(u32::MAX);
+            self.clock_ms = self.clock_ms.wrapping_add(ms);
+            self.clock_rest_us = u32::try_from(total % 1000).unwrap_or(0);
+        }
+        self.clock_last_us = Some(now_us);
+        self.clock_ms
+    }
+
+    /// The program's millisecond clock at the start of the last cycle (wrapping at 2³² ms). It
+    /// stands still while the power is off: timers resume where they were.
+    #[must_use]
+    pub const fn now_ms(&self) -> u32 {
+        self.clock_ms
     }
 
     /// Level C, the performance reserve: runs spool jobs while the next cycle is more than
@@ -391,12 +420,14 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
     }
 
     /// Power is back: the next cycle continues where the last one left off, with the inputs
-    /// latched meanwhile. The first cycle after a resume is not counted as jitter.
+    /// latched meanwhile. The outage is not counted as jitter, nor as time for the program's
+    /// timers: they resume where they stood.
     pub fn resume(&mut self) {
         if self.state == State::PowerFail {
             self.state = State::Running;
             self.last_start_us = None;
             self.last_end_us = None;
+            self.clock_last_us = None;
         }
     }
 
@@ -782,6 +813,26 @@ mod tests {
         assert!((1..8).contains(&n), "{n}");
         assert_eq!(ran, (0..n as u32).collect::<Vec<_>>());
         assert_eq!(spool.len(), 8 - n);
+    }
+
+    #[test]
+    fn program_clock_runs_across_the_microsecond_wrap() {
+        let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(CycleConfig::source()));
+        io.t = u32::MAX - 120_000; // 120 ms before the µs clock wraps
+        io.step_us = 25_000; // two reads a cycle: 50 ms per cycle
+        let mut ton = crate::Ton::new(1_000);
+        let mut fired_after = None;
+        for cycle in 1..=40 {
+            plc.cycle(&mut io, |s| {
+                if ton.call(true, s.now_ms) && fired_after.is_none() {
+                    fired_after = Some(cycle);
+                }
+            })
+            .unwrap();
+        }
+        // Started at cycle 1; 1 000 ms later is cycle 21, not the wrap at cycle 3.
+        assert_eq!(fired_after, Some(21));
+        assert_eq!(plc.now_ms(), 39 * 50);
     }
 
     #[test]
