@@ -71,7 +71,8 @@ struct Entry<A> {
 /// wheel (six levels of 64 slots): `insert`, `replace` and `remove` are O(1); a tick looks at one
 /// slot, and every 64ᵏ ticks moves one slot's entries a level down, so each entry is touched a
 /// bounded number of times (at most six) in its life: O(1) amortised per tick, whatever the
-/// number of timers. `N` entries fit; nothing is allocated.
+/// number of timers. `N` entries fit; nothing is allocated. Memory: the slot table takes 3 KB
+/// (384 slots, head and tail each a `u32`) whatever `N`, plus about 20 bytes and an `A` per entry.
 ///
 /// ```
 /// use regler_scan_cycle::TimerQueue;
