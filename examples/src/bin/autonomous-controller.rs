@@ -17,7 +17,7 @@ use regler_examples::svg::{self, Series};
 enum ProcessArg {
     /// A room heated through a 30 min lag with 2 min dead time; outdoor temperature disturbs it.
     Room,
-    /// A tank level, fast, with a growing outflow.
+    /// A tank level, fast; its outflow valve moves every five minutes.
     Tank,
 }
 
@@ -33,7 +33,7 @@ enum InterfaceArg {
 /// Operate it through the source's terminal dialogue or keypad with a timed --script, or type
 /// at it with --interactive; without either it runs a built-in demonstration script.
 #[derive(Debug, Parser)]
-#[command(name = "autonomous-controller", version, about, long_about = None, allow_negative_numbers = true)]
+#[command(name = "autonomous-controller", version, allow_negative_numbers = true)]
 struct Args {
     /// The simulated process.
     #[arg(long, value_enum, default_value_t = ProcessArg::Room)]

@@ -24,7 +24,7 @@ enum StrategyArg {
 /// 2 m a year. Each run compares four controllers: parity only or voting over several scans,
 /// with or without stretch correction (DA = SA·DIA/SIA).
 #[derive(Debug, Parser)]
-#[command(name = "mailbag-sorter", version, about, long_about = None, allow_negative_numbers = true)]
+#[command(name = "mailbag-sorter", version, allow_negative_numbers = true)]
 struct Args {
     /// Seed of every random choice: the same seed gives the same run.
     #[arg(long, default_value_t = 1977)]

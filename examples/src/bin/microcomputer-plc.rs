@@ -23,7 +23,7 @@ use serde::Serialize;
 /// clear breaks, force in|out POINT 0|1, unforce in|out POINT, show, spool, stats, quit. Points
 /// are numbers or names (start, stop, part, bad, reset; motor, jam, gate, run).
 #[derive(Debug, Parser)]
-#[command(name = "microcomputer-plc", version, about, long_about = None)]
+#[command(name = "microcomputer-plc", version)]
 struct Args {
     /// Monitor commands, one a line (default: a built-in demonstration).
     #[arg(long)]
