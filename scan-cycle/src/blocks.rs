@@ -74,30 +74,6 @@ impl Ton {
         self.q = elapsed >= self.pt_ms;
         self.q
     }
-
-    /// Elapsed time ET, saturating at PT.
-    #[must_use]
-    pub fn et(&self) -> u32 {
-        self.running.map_or(0, |r| r.total_ms.min(self.pt_ms))
-    }
-
-    /// Q as of the last call.
-    #[must_use]
-    pub const fn q(&self) -> bool {
-        self.q
-    }
-
-    /// The preset time PT.
-    #[must_use]
-    pub const fn pt(&self) -> u32 {
-        self.pt_ms
-    }
-
-    /// Changes PT; takes effect at the next call (a running timer compares its elapsed time
-    /// with the new PT).
-    pub fn set_pt(&mut self, pt_ms: u32) {
-        self.pt_ms = pt_ms;
-    }
 }
 
 /// TOF, off-delay timer: Q is on while IN is on and for PT after IN goes off.
@@ -143,23 +119,6 @@ impl Tof {
             self.q = running.advance(now_ms) < self.pt_ms;
         }
         self.q
-    }
-
-    /// Elapsed time ET since IN went off, saturating at PT (0 while IN is on).
-    #[must_use]
-    pub fn et(&self) -> u32 {
-        self.running.map_or(0, |r| r.total_ms.min(self.pt_ms))
-    }
-
-    /// Q as of the last call.
-    #[must_use]
-    pub const fn q(&self) -> bool {
-        self.q
-    }
-
-    /// Changes PT.
-    pub fn set_pt(&mut self, pt_ms: u32) {
-        self.pt_ms = pt_ms;
     }
 }
 
@@ -214,24 +173,45 @@ impl Tp {
         }
         self.q
     }
-
-    /// Elapsed time ET of the pulse, saturating at PT.
-    #[must_use]
-    pub fn et(&self) -> u32 {
-        self.running.map_or(0, |r| r.total_ms.min(self.pt_ms))
-    }
-
-    /// Q as of the last call.
-    #[must_use]
-    pub const fn q(&self) -> bool {
-        self.q
-    }
-
-    /// Changes PT.
-    pub fn set_pt(&mut self, pt_ms: u32) {
-        self.pt_ms = pt_ms;
-    }
 }
+
+/// ET, Q, PT and a PT change, alike for the three timers (each has `pt_ms`, `running`, `q`).
+macro_rules! timer_accessors {
+    ($timer:ident, $et_doc:literal) => {
+        impl $timer {
+            #[doc = $et_doc]
+            #[must_use]
+            pub fn et(&self) -> u32 {
+                self.running.map_or(0, |r| r.total_ms.min(self.pt_ms))
+            }
+
+            /// Q as of the last call.
+            #[must_use]
+            pub const fn q(&self) -> bool {
+                self.q
+            }
+
+            /// The preset time PT, ms.
+            #[must_use]
+            pub const fn pt(&self) -> u32 {
+                self.pt_ms
+            }
+
+            /// Changes PT; takes effect at the next call (a running timer compares the time it
+            /// has really run with the new PT).
+            pub fn set_pt(&mut self, pt_ms: u32) {
+                self.pt_ms = pt_ms;
+            }
+        }
+    };
+}
+
+timer_accessors!(Ton, "Elapsed time ET while IN is on, saturating at PT.");
+timer_accessors!(
+    Tof,
+    "Elapsed time ET since IN went off, saturating at PT (0 while IN is on)."
+);
+timer_accessors!(Tp, "Elapsed time ET of the pulse, saturating at PT.");
 
 /// R_TRIG: Q is on for the one call in which CLK goes from off to on.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
