@@ -197,20 +197,7 @@ impl Keypad {
         text: &str,
         station: &mut Station<T>,
     ) -> KeyEffect {
-        let result = if code == Code::Typ {
-            Kind::parse(text)
-                .ok_or(EditError::NotANumber(code))
-                .and_then(|k| station.staged_mut().edit_kind(k))
-        } else {
-            match text.parse::<f64>() {
-                Ok(v) => station.staged_mut().edit(code, v),
-                Err(_) => Err(EditError::IllegalValue {
-                    code,
-                    value: f64::NAN,
-                    requirement: "a number",
-                }),
-            }
-        };
+        let result = stage(station, code, text);
         self.state = State::Code(String::new());
         match result {
             Ok(()) => {
@@ -227,6 +214,24 @@ impl Keypad {
             }
         }
     }
+}
+
+/// Stages an operator's entry for `code`: a controller type (P, PI, …) for TYP, a number for the
+/// others. The keypad and the terminal both enter values this way.
+pub fn stage<T: Scalar>(station: &mut Station<T>, code: Code, text: &str) -> Result<(), EditError> {
+    if code == Code::Typ {
+        let kind = Kind::parse(text).ok_or(EditError::NotANumber(code))?;
+        return station.staged_mut().edit_kind(kind);
+    }
+    let value = text
+        .trim()
+        .parse::<f64>()
+        .map_err(|_| EditError::IllegalValue {
+            code,
+            value: f64::NAN,
+            requirement: "a number",
+        })?;
+    station.staged_mut().edit(code, value)
 }
 
 /// Keys that belong to an entry: P, I, D for TYP; digits, '.' and '-' for numbers.

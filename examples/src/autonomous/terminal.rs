@@ -6,7 +6,7 @@
 //! what the terminal prints.
 
 use regler_pid::{
-    Action, Code, Config, EditError, Kind, OperatorLimits, Parameters, Scalar, Scaling, Station,
+    Action, Code, Config, Kind, OperatorLimits, Parameters, Scalar, Scaling, Station,
 };
 
 use super::keypad::trim;
@@ -360,21 +360,7 @@ impl Terminal {
                 }
                 let mut out = Vec::new();
                 if !answer.is_empty() {
-                    let result = if code == Code::Typ {
-                        match Kind::parse(answer) {
-                            Some(k) => station.staged_mut().edit_kind(k),
-                            None => Err(EditError::NotANumber(code)),
-                        }
-                    } else {
-                        match answer.parse::<f64>() {
-                            Ok(v) => station.staged_mut().edit(code, v),
-                            Err(_) => Err(EditError::IllegalValue {
-                                code,
-                                value: f64::NAN,
-                                requirement: "a number",
-                            }),
-                        }
-                    };
+                    let result = super::keypad::stage(station, code, answer);
                     if let Err(e) = result {
                         out.push(if code == Code::Typ {
                             " WRONG TYPE".into()
