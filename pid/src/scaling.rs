@@ -119,16 +119,7 @@ impl Scaling {
     /// An engineering value as the nearest A/D count (clamped to 0–4095), for simulators.
     #[must_use]
     pub fn units_to_count(&self, units: f64) -> u16 {
-        let x = (units - self.min) / (self.max - self.min) * f64::from(ADC_FULL_SCALE);
-        if x.is_nan() || x <= 0.0 {
-            0
-        } else if x >= f64::from(ADC_FULL_SCALE) {
-            ADC_FULL_SCALE
-        } else {
-            #[allow(clippy::cast_possible_truncation, reason = "0 < x + 0.5 < 4096")]
-            let count = (x + 0.5) as u16;
-            count
-        }
+        nearest_count((units - self.min) / (self.max - self.min), ADC_FULL_SCALE)
     }
 
     /// Whether `units` lies within the scale (the source's check of WIN).
@@ -142,22 +133,32 @@ impl Scaling {
         if volts.is_nan() {
             return Err(ScalingError::NotANumber);
         }
-        let x = volts / SPAN_VOLTS * f64::from(DAC_FULL_SCALE);
-        Ok(if x <= 0.0 {
-            0
-        } else if x >= f64::from(DAC_FULL_SCALE) {
-            DAC_FULL_SCALE
-        } else {
-            #[allow(clippy::cast_possible_truncation, reason = "0 < x + 0.5 < 256")]
-            let count = (x + 0.5) as u8;
-            count
-        })
+        let count = nearest_count(volts / SPAN_VOLTS, u16::from(DAC_FULL_SCALE));
+        Ok(u8::try_from(count).unwrap_or(DAC_FULL_SCALE))
     }
 
     /// An 8-bit D/A count in volts.
     #[must_use]
     pub fn dac_to_volts(count: u8) -> f64 {
         f64::from(count) * SPAN_VOLTS / f64::from(DAC_FULL_SCALE)
+    }
+}
+
+/// The converter count nearest to `fraction` of full scale: halves up, clamped to 0..=`full`,
+/// NaN as 0.
+fn nearest_count(fraction: f64, full: u16) -> u16 {
+    let x = fraction * f64::from(full);
+    if x.is_nan() || x <= 0.0 {
+        0
+    } else if x >= f64::from(full) {
+        full
+    } else {
+        #[allow(
+            clippy::cast_possible_truncation,
+            reason = "0 < x + 0.5 < full + 1 <= 65536"
+        )]
+        let count = (x + 0.5) as u16;
+        count
     }
 }
 
