@@ -5,9 +5,7 @@
 //! [`Terminal::startup_line`] and then [`Terminal::running_line`], which return
 //! what the terminal prints.
 
-use regler_pid::{
-    Action, Code, Config, Kind, OperatorLimits, Parameters, Scalar, Scaling, Station,
-};
+use regler_pid::{Action, Code, Config, Kind, Parameters, Scalar, Scaling, Station};
 
 use super::keypad::trim;
 
@@ -431,15 +429,10 @@ fn prompt<T: Scalar>(code: Code, station: &Station<T>) -> String {
     format!("{}={value}    {} ?>", code.name(), code.name())
 }
 
-/// The operator limits the dialogue applies.
-#[must_use]
-pub fn limits() -> OperatorLimits {
-    OperatorLimits::default()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use regler_pid::OperatorLimits;
 
     fn start(answers: &[&str]) -> (Terminal, Vec<String>, Option<Startup>) {
         let mut t = Terminal::new();
@@ -508,7 +501,7 @@ mod tests {
             "PI", "10", "0", "10", "0", "3", "60", "0", "100", "DIR", "5", "50", "",
         ]);
         let s = result.unwrap();
-        let mut st = Station::<f64>::new(s.params, s.scaling, limits()).unwrap();
+        let mut st = Station::<f64>::new(s.params, s.scaling, OperatorLimits::default()).unwrap();
         st.sample(40.0);
         assert!(Terminal::status(&st).contains("XIN= 40"));
         t.running_line("Y", &mut st);
