@@ -1,6 +1,12 @@
 //! The controller's parameters in engineering units, and their validation.
+#![allow(
+    clippy::arithmetic_side_effects,
+    reason = "arithmetic here is on Real (sealed: f32 or f64), which cannot panic or wrap; an overflow is an infinity, and every path checks finiteness"
+)]
 
 use core::fmt;
+
+use crate::real::Real;
 
 /// Which terms the controller has (the source's TYP).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -106,68 +112,80 @@ impl Action {
     }
 }
 
-/// The parameters of a [`Pid`](crate::Pid), in engineering units.
+/// The parameters of a [`Pid`](crate::Pid), in engineering units, in `f64` (the default) or
+/// `f32` ([`Real`]).
 ///
 /// Build one from [`Config::default`] and change the fields you need; every constructor checks
-/// it with [`validate`](Config::validate).
+/// it with [`validate`](Config::validate). Firmware on a single-precision FPU writes its numbers
+/// as `f32` and links no `f64` arithmetic:
 ///
 /// ```
-/// use regler_pid::{Action, Config, Kind};
+/// use regler_pid::{Action, Config, Kind, Pid};
 /// let config = Config { kind: Kind::PI, action: Action::Reverse, k: 2.0, ti: 30.0, ..Config::default() };
-/// assert!(config.validate().is_ok());
+/// assert!(config.validate().is_ok()); // Config<f64>: float literals default to f64
+///
+/// let mut c = Config::default();      // Config<f32>, from the field types below
+/// c.k = 2.0f32;
+/// c.ti = 30.0;
+/// let mut pid = Pid::<f32>::new(&c)?;
+/// assert_eq!(pid.update(1.0, 0.0), 2.0);
+/// # Ok::<(), regler_pid::ConfigError<f32>>(())
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Config {
+pub struct Config<F = f64> {
     /// Which terms the controller has.
     pub kind: Kind,
     /// Direct or reverse action.
     pub action: Action,
     /// Gain K (used only by kinds with a P term; the others use a gain of 1, as the source).
-    pub k: f64,
+    pub k: F,
     /// Integral time Ti, seconds; > 0 for kinds with an I term.
-    pub ti: f64,
+    pub ti: F,
     /// Derivative time Td, seconds; ≥ 0.
-    pub td: f64,
+    pub td: F,
     /// Derivative filter N: the derivative gain at high frequency is limited to N·K; > 0.
-    pub n: f64,
+    pub n: F,
     /// Set-point weight in the P term (1 = error, 0 = measurement only).
-    pub b: f64,
+    pub b: F,
     /// Set-point weight in the D term (0 = derivative on measurement: no kick on a set-point
     /// step; 1 = derivative of the error, as the source).
-    pub c: f64,
+    pub c: F,
     /// Anti-windup tracking time Tt, seconds; `None` = one sample (Tt = h), exactly the
-    /// source's H = H + Y − V + A1·E; > 0.
-    pub tt: Option<f64>,
+    /// source's H = H + Y − V + A1·E. Must exceed h/2: the tracking step h/Tt must stay below 2,
+    /// or the integral oscillates with growing amplitude once the output saturates.
+    pub tt: Option<F>,
     /// Sample period h, seconds; > 0 (the source: 1–255 s).
-    pub h: f64,
+    pub h: F,
     /// Lowest output.
-    pub ymin: f64,
+    pub ymin: F,
     /// Highest output; ≥ `ymin`.
-    pub ymax: f64,
-    /// Largest output change per sample; `None` = no rate limit; ≥ 0.
-    pub dymax: Option<f64>,
+    pub ymax: F,
+    /// Largest output change per sample, ≥ 0; `None` or `Some(0)` = no rate limit (as the
+    /// operator layer's DYMAX 0: the source's 0 froze the output, which manual mode does better).
+    pub dymax: Option<F>,
 }
 
-impl Default for Config {
+impl<F: Real> Default for Config<F> {
     /// The keypad start-up values of the source: PID, direct, K = 10, Ti = 8 s, Td = 0 s,
     /// N = 5, sample period 1 s, output 0–10 (volts), no rate limit; b = 1, c = 0 (no
     /// derivative kick), Tt = one sample.
-    fn default() -> Config {
+    fn default() -> Config<F> {
+        let n = F::from_u16;
         Config {
             kind: Kind::PID,
             action: Action::Direct,
-            k: 10.0,
-            ti: 8.0,
-            td: 0.0,
-            n: 5.0,
-            b: 1.0,
-            c: 0.0,
+            k: n(10),
+            ti: n(8),
+            td: n(0),
+            n: n(5),
+            b: n(1),
+            c: n(0),
             tt: None,
-            h: 1.0,
-            ymin: 0.0,
-            ymax: 10.0,
+            h: n(1),
+            ymin: n(0),
+            ymax: n(10),
             dymax: None,
         }
     }
@@ -232,33 +250,54 @@ impl fmt::Display for Parameter {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
-pub enum ConfigError {
+pub enum ConfigError<F = f64> {
     /// A parameter is NaN or infinite.
     NotFinite {
         /// Which.
         parameter: Parameter,
         /// Its value.
-        value: f64,
+        value: F,
     },
     /// A parameter is outside its range.
     OutOfRange {
         /// Which.
         parameter: Parameter,
         /// Its value.
-        value: f64,
+        value: F,
         /// What it must be, e.g. "> 0 when the controller has integral action".
         requirement: &'static str,
     },
     /// `ymin` is above `ymax`.
     LimitsReversed {
         /// Lowest output asked for.
-        ymin: f64,
+        ymin: F,
         /// Highest output asked for.
-        ymax: f64,
+        ymax: F,
+    },
+    /// `tt` is at most h/2: the tracking step h/Tt would be 2 or more, and the integral would
+    /// oscillate with growing amplitude whenever the output saturates.
+    TrackingUnstable {
+        /// The tracking time asked for.
+        tt: F,
+        /// The sample period.
+        h: F,
+    },
+    /// The parameter is valid, but a coefficient it gives cannot be held by the controller's
+    /// number type within [`TOLERANCE`](crate::TOLERANCE) (it overflows, vanishes, or rounds
+    /// too far: `K·h/Ti` = 5e-6 is 0 in `I16F16`, `K` = 1e5 saturates there).
+    Unrepresentable {
+        /// The parameter that sets the coefficient.
+        parameter: Parameter,
+        /// Its value.
+        value: F,
+        /// The coefficient, e.g. "K·h/Ti".
+        coefficient: &'static str,
+        /// The coefficient's value, computed in the configuration's type.
+        exact: F,
     },
 }
 
-impl fmt::Display for ConfigError {
+impl<F: Real> fmt::Display for ConfigError<F> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             ConfigError::NotFinite { parameter, value } => {
@@ -277,16 +316,54 @@ impl fmt::Display for ConfigError {
                     "ymin must not exceed ymax, got ymin {ymin} > ymax {ymax}"
                 )
             }
+            ConfigError::TrackingUnstable { tt, h } => {
+                let half = h / F::from_u16(2);
+                write!(
+                    f,
+                    "tt must be > h/2 = {half} for stable anti-windup tracking, got {tt}"
+                )
+            }
+            ConfigError::Unrepresentable {
+                parameter,
+                value,
+                coefficient,
+                exact,
+            } => {
+                write!(
+                    f,
+                    "{parameter} = {value} gives {coefficient} = {exact}, which the controller's number type cannot hold within 0.1 %"
+                )
+            }
         }
     }
 }
 
-impl core::error::Error for ConfigError {}
+impl<F: Real> core::error::Error for ConfigError<F> {}
 
-impl Config {
+impl<F> ConfigError<F> {
+    /// The parameter the error is about (`ymax` for reversed limits, `tt` for unstable
+    /// tracking).
+    #[must_use]
+    pub const fn parameter(&self) -> Parameter {
+        match self {
+            ConfigError::NotFinite { parameter, .. }
+            | ConfigError::OutOfRange { parameter, .. }
+            | ConfigError::Unrepresentable { parameter, .. } => *parameter,
+            ConfigError::LimitsReversed { .. } => Parameter::Ymax,
+            ConfigError::TrackingUnstable { .. } => Parameter::Tt,
+        }
+    }
+}
+
+impl<F: Real> Config<F> {
     /// Checks every parameter; the error names the first one that is wrong.
-    pub fn validate(&self) -> Result<(), ConfigError> {
-        let finite = |parameter: Parameter, value: f64| {
+    ///
+    /// Ranges: k, b, c finite; ti > 0 for kinds with an I term; td ≥ 0; n > 0; h > 0;
+    /// tt > h/2; ymin ≤ ymax; dymax ≥ 0. Whether the number type of a [`Pid`](crate::Pid) can
+    /// hold the resulting coefficients is checked by [`Pid::new`](crate::Pid::new).
+    pub fn validate(&self) -> Result<(), ConfigError<F>> {
+        let zero = F::zero();
+        let finite = |parameter: Parameter, value: F| {
             if value.is_finite() {
                 Ok(value)
             } else {
@@ -304,29 +381,32 @@ impl Config {
                 })
             }
         };
-        let k = finite(Parameter::K, self.k)?;
-        let _ = k;
+        finite(Parameter::K, self.k)?;
         let ti = finite(Parameter::Ti, self.ti)?;
         if self.kind.has_i() {
             range(
                 Parameter::Ti,
                 ti,
-                ti > 0.0,
+                ti > zero,
                 "> 0 when the controller has integral action",
             )?;
         }
         let td = finite(Parameter::Td, self.td)?;
-        range(Parameter::Td, td, td >= 0.0, ">= 0")?;
+        range(Parameter::Td, td, td >= zero, ">= 0")?;
         let n = finite(Parameter::N, self.n)?;
-        range(Parameter::N, n, n > 0.0, "> 0")?;
+        range(Parameter::N, n, n > zero, "> 0")?;
         finite(Parameter::B, self.b)?;
         finite(Parameter::C, self.c)?;
+        let h = finite(Parameter::H, self.h)?;
+        range(Parameter::H, h, h > zero, "> 0")?;
         if let Some(tt) = self.tt {
             let tt = finite(Parameter::Tt, tt)?;
-            range(Parameter::Tt, tt, tt > 0.0, "> 0")?;
+            range(Parameter::Tt, tt, tt > zero, "> 0")?;
+            // h/tt < 2, written so that it cannot overflow: tt > h/2.
+            if tt <= h / F::from_u16(2) {
+                return Err(ConfigError::TrackingUnstable { tt, h });
+            }
         }
-        let h = finite(Parameter::H, self.h)?;
-        range(Parameter::H, h, h > 0.0, "> 0")?;
         let ymin = finite(Parameter::Ymin, self.ymin)?;
         let ymax = finite(Parameter::Ymax, self.ymax)?;
         if ymin > ymax {
@@ -334,9 +414,15 @@ impl Config {
         }
         if let Some(dymax) = self.dymax {
             let dymax = finite(Parameter::Dymax, dymax)?;
-            range(Parameter::Dymax, dymax, dymax >= 0.0, ">= 0")?;
+            range(Parameter::Dymax, dymax, dymax >= zero, ">= 0")?;
         }
         Ok(())
+    }
+
+    /// The largest output change per sample, if there is a rate limit (`Some(0)` is none).
+    #[must_use]
+    pub fn rate_limit(&self) -> Option<F> {
+        self.dymax.filter(|d| *d > F::zero())
     }
 }
 
@@ -420,6 +506,73 @@ mod tests {
             let err = config.validate().unwrap_err().to_string();
             assert!(err.starts_with(message), "{err}");
         }
+    }
+
+    #[test]
+    fn tracking_faster_than_half_a_sample_is_refused() {
+        let at = |tt: f64| {
+            Config {
+                tt: Some(tt),
+                h: 1.0,
+                ..Config::default()
+            }
+            .validate()
+        };
+        assert_eq!(
+            at(0.1),
+            Err(ConfigError::TrackingUnstable { tt: 0.1, h: 1.0 })
+        );
+        assert!(
+            at(0.5).is_err(),
+            "h/Tt = 2 is the edge: the integral oscillates for ever"
+        );
+        assert!(at(0.500_001).is_ok());
+        assert_eq!(
+            at(0.25).unwrap_err().to_string(),
+            "tt must be > h/2 = 0.5 for stable anti-windup tracking, got 0.25"
+        );
+        // No overflow in the check itself.
+        assert!(
+            Config {
+                tt: Some(f64::MAX),
+                h: f64::MAX,
+                ..Config::default()
+            }
+            .validate()
+            .is_ok()
+        );
+    }
+
+    #[test]
+    #[allow(
+        clippy::field_reassign_with_default,
+        reason = "the contract's own spelling"
+    )]
+    fn an_f32_config_validates_in_f32() {
+        let mut c = Config::default();
+        c.k = 2.0f32;
+        c.tt = Some(0.2);
+        assert_eq!(
+            c.validate(),
+            Err(ConfigError::TrackingUnstable { tt: 0.2f32, h: 1.0 })
+        );
+        assert_eq!(Config::<f32>::default().rate_limit(), None);
+        assert_eq!(
+            Config {
+                dymax: Some(0.0),
+                ..Config::default()
+            }
+            .rate_limit(),
+            None
+        );
+        assert_eq!(
+            Config {
+                dymax: Some(0.5),
+                ..Config::default()
+            }
+            .rate_limit(),
+            Some(0.5)
+        );
     }
 
     #[test]

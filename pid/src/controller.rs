@@ -3,7 +3,8 @@
 
 use core::fmt;
 
-use crate::config::{Config, ConfigError};
+use crate::config::{Action, Config, ConfigError, Parameter};
+use crate::real::Real;
 use crate::scalar::Scalar;
 
 /// Whether the controller computes its output or follows the operator's.
@@ -97,6 +98,25 @@ impl<T: Scalar> Default for Inputs<T> {
     }
 }
 
+/// How far a coefficient or limit may move when it is converted into the controller's number
+/// type: 2⁻¹⁰ (about 0.1 %) of its value (for the output limits: of the larger of |ymin| and
+/// |ymax|). [`Pid::new`] refuses a configuration whose conversion is further off, overflows or
+/// vanishes, and names the parameter ([`ConfigError::Unrepresentable`]).
+pub const TOLERANCE: f32 = 1.0 / 1024.0;
+
+/// How far the controller's states may reach, in output scales: the derivative term stays within
+/// ±`STATE_BOUND`·S and the integral (of kinds with an I term) within `STATE_BOUND`·S beyond
+/// what would hold the output at a limit in steady state (I = u − K·(b − 1)·r − feed-forward),
+/// where S = max(ymax − ymin, |ymin|, |ymax|).
+///
+/// A state that far out drives the output hard into a limit, so the bound changes nothing a
+/// working loop does; it keeps a single absurd but finite reading (a broken sensor's 1e300) from
+/// parking a state so far away that it takes hours to decay (without it: about 690·Tt). With
+/// it, a loop is back within 1 % of its undisturbed course after at most 14 of its slowest time
+/// constants (Ti, Tt, Td/N, the plant's), over the loops the property tests try; the bound's
+/// size hardly matters (10 scales: 11, 1 scale: 9.5), so it is wide.
+pub const STATE_BOUND: u16 = 100;
+
 /// Åström's PID controller with the anti-windup of the 1985 source, for `f32`, `f64` and
 /// fixed point.
 ///
@@ -113,21 +133,29 @@ impl<T: Scalar> Default for Inputs<T> {
 /// ```
 ///
 /// Kinds without P use a gain of 1 for I and D, as the source does. The state is
-/// I = D = 0 and u_old = 0 clamped into the limits at start; the first sample sets y_old, r_old.
+/// I = D = 0 and u_old = 0 clamped into the limits at start; the first sample with finite inputs
+/// sets y_old, r_old. D and I are kept within [`STATE_BOUND`] output scales.
 ///
-/// A NaN or infinite set-point or measurement holds the output and sets a
-/// [`Faults`] flag; `update` never returns NaN or infinity. A `Pid<f32>` takes 64 bytes.
+/// A NaN or infinite set-point or measurement (the first sample included) holds the output, sets a
+/// [`Faults`] flag and leaves every state as it was, so the controller runs on as soon as the
+/// inputs are finite again; `update` never returns NaN or infinity. A `Pid<T>` holds 19 values of
+/// `T` and 5 bytes of flags, padded to `T`'s alignment: 84 bytes for `f32`, 160 for `f64` and
+/// `I32F32`.
 ///
 /// ```
 /// use regler_pid::{Config, Kind, Pid};
 /// let config = Config { kind: Kind::PI, k: 2.0, ti: 10.0, h: 0.5, ymin: 0.0, ymax: 100.0, ..Config::default() };
 /// let mut pid = Pid::<f32>::new(&config)?;
+/// assert_eq!(pid.update(20.0, f32::NAN), 0.0); // a sensor not ready at power-up: held, flagged
+/// assert!(pid.faults().non_finite_input());
+/// pid.clear_faults();
 /// let mut temperature = 15.0f32;
 /// for _ in 0..200 {
 ///     let heat = pid.update(20.0, temperature);
 ///     temperature += 0.5 * (0.05 * heat - 0.02 * (temperature - 10.0)); // a room losing heat
 /// }
 /// assert!((temperature - 20.0).abs() < 0.1);
+/// assert!(!pid.faults().any());
 /// # Ok::<(), regler_pid::ConfigError>(())
 /// ```
 #[derive(Clone, Debug, PartialEq)]
@@ -142,6 +170,15 @@ pub struct Pid<T> {
     ymin: T,
     ymax: T,
     dymax: T,
+    /// kp·(1 − b): the P term's steady-state offset per unit of set-point, which the integral
+    /// must cancel; the integral's bounds move with it.
+    offset_slope: T,
+    i_lo: T,
+    i_hi: T,
+    d_bound: T,
+    /// Kinds with I clamp the integral every sample; the others hold a constant bias (their
+    /// manual reset), bounded only where it is set.
+    integrates: bool,
     i: T,
     d: T,
     y_old: T,
@@ -153,67 +190,192 @@ pub struct Pid<T> {
     faults: Faults,
 }
 
-impl<T: Scalar> Pid<T> {
-    /// A controller for `config`, or the error naming its bad parameter.
-    pub fn new(config: &Config) -> Result<Pid<T>, ConfigError> {
+/// The coefficients of one configuration, converted and checked, before any is applied.
+struct Coefficients<T> {
+    kp: T,
+    b: T,
+    c: T,
+    bi: T,
+    ad: T,
+    bd: T,
+    ao: T,
+    ymin: T,
+    ymax: T,
+    dymax: Option<T>,
+    offset_slope: T,
+    i_lo: T,
+    i_hi: T,
+    d_bound: T,
+    integrates: bool,
+}
+
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "arithmetic on Real (sealed: f32 or f64) cannot panic or wrap; the results are checked by hold()"
+)]
+impl<T: Scalar> Coefficients<T> {
+    fn new<F: Real>(config: &Config<F>) -> Result<Coefficients<T>, ConfigError<F>> {
         config.validate()?;
+        let zero = F::zero();
+        let one = F::one();
+        let kind = config.kind;
+        let signed = |x: F| match config.action {
+            Action::Direct => x,
+            Action::Reverse => -x,
+        };
+        let gain = if kind.has_p() { config.k } else { one };
+        let dn = config.td + config.n * config.h;
+        // Same operation order as the reference algorithm (s·bi, s·bd), so f64 results agree
+        // to the last bit.
+        let kp = if kind.has_p() { signed(config.k) } else { zero };
+        let bi = if kind.has_i() {
+            signed(gain * config.h / config.ti)
+        } else {
+            zero
+        };
+        let ad = if kind.has_d() { config.td / dn } else { zero };
+        let bd = if kind.has_d() {
+            signed(gain * config.td * config.n / dn)
+        } else {
+            zero
+        };
+        let tt = config.tt.unwrap_or(config.h);
+        let ao = if kind.has_i() { config.h / tt } else { zero };
+        let term = |exact: F, parameter, value, coefficient, needed: bool| {
+            hold::<T, F>(exact, exact.abs(), needed, parameter, value, coefficient)
+        };
+        let td_used = kind.has_d() && config.td != zero;
+        let scale = config.ymin.abs().max(config.ymax.abs());
+        let limit =
+            |value: F, parameter, name| hold::<T, F>(value, scale, false, parameter, value, name);
+        let dymax = match config.rate_limit() {
+            Some(d) => Some(limit(d, Parameter::Dymax, "dymax")?),
+            None => None,
+        };
+        let bound = F::from_u16(STATE_BOUND) * (config.ymax - config.ymin).max(scale);
+        Ok(Coefficients {
+            kp: term(
+                kp,
+                Parameter::K,
+                config.k,
+                "s·K",
+                kind.has_p() && config.k != zero,
+            )?,
+            b: term(config.b, Parameter::B, config.b, "b", false)?,
+            c: term(config.c, Parameter::C, config.c, "c", false)?,
+            bi: term(
+                bi,
+                Parameter::Ti,
+                config.ti,
+                "K·h/Ti",
+                kind.has_i() && gain != zero,
+            )?,
+            ad: term(ad, Parameter::Td, config.td, "Td/(Td + N·h)", td_used)?,
+            bd: term(
+                bd,
+                Parameter::Td,
+                config.td,
+                "K·Td·N/(Td + N·h)",
+                td_used && gain != zero,
+            )?,
+            ao: term(ao, Parameter::Tt, tt, "h/Tt", kind.has_i())?,
+            ymin: limit(config.ymin, Parameter::Ymin, "ymin")?,
+            ymax: limit(config.ymax, Parameter::Ymax, "ymax")?,
+            dymax,
+            offset_slope: T::from_real(kp * (one - config.b)),
+            i_lo: T::from_real(config.ymin - bound),
+            i_hi: T::from_real(config.ymax + bound),
+            integrates: kind.has_i(),
+            d_bound: T::from_real(bound),
+        })
+    }
+}
+
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "arithmetic on Real (sealed: f32 or f64) cannot panic or wrap; a non-finite result is refused"
+)]
+/// `exact` in `T`, if it survives the conversion within [`TOLERANCE`] of `scale` and, when
+/// `needed`, did not vanish (underflow) on the way.
+fn hold<T: Scalar, F: Real>(
+    exact: F,
+    scale: F,
+    needed: bool,
+    parameter: Parameter,
+    value: F,
+    coefficient: &'static str,
+) -> Result<T, ConfigError<F>> {
+    let converted = T::from_real(exact);
+    let back: F = converted.to_real();
+    let zero = F::zero();
+    let vanished = (needed && exact == zero) || (exact != zero && !exact.is_normal());
+    let close = (back - exact).abs() <= F::from_f32_exact(TOLERANCE) * scale;
+    if exact.is_finite() && !vanished && close {
+        Ok(converted)
+    } else {
+        Err(ConfigError::Unrepresentable {
+            parameter,
+            value,
+            coefficient,
+            exact,
+        })
+    }
+}
+
+impl<T: Scalar> Pid<T> {
+    /// A controller for `config` (in `f64` or `f32`), or the error naming its bad parameter.
+    ///
+    /// Besides [`Config::validate`], every coefficient and limit must convert into `T` within
+    /// [`TOLERANCE`]; otherwise [`ConfigError::Unrepresentable`] names the parameter.
+    pub fn new<F: Real>(config: &Config<F>) -> Result<Pid<T>, ConfigError<F>> {
+        let k = Coefficients::<T>::new(config)?;
         let mut pid = Pid {
-            kp: T::ZERO,
-            b: T::ZERO,
-            c: T::ZERO,
-            bi: T::ZERO,
-            ad: T::ZERO,
-            bd: T::ZERO,
-            ao: T::ZERO,
-            ymin: T::ZERO,
-            ymax: T::ZERO,
-            dymax: T::ZERO,
+            kp: k.kp,
+            b: k.b,
+            c: k.c,
+            bi: k.bi,
+            ad: k.ad,
+            bd: k.bd,
+            ao: k.ao,
+            ymin: k.ymin,
+            ymax: k.ymax,
+            dymax: k.dymax.unwrap_or(T::ZERO),
+            offset_slope: k.offset_slope,
+            i_lo: k.i_lo,
+            i_hi: k.i_hi,
+            d_bound: k.d_bound,
+            integrates: k.integrates,
             i: T::ZERO,
             d: T::ZERO,
             y_old: T::ZERO,
             r_old: T::ZERO,
             u_old: T::ZERO,
-            has_dymax: false,
+            has_dymax: k.dymax.is_some(),
             started: false,
             mode: Mode::Auto,
             faults: Faults::default(),
         };
-        pid.set_coefficients(config);
         pid.u_old = T::ZERO.clamp_within(pid.ymin, pid.ymax);
         Ok(pid)
     }
 
-    fn set_coefficients(&mut self, config: &Config) {
-        let s = config.action.sign();
-        let kind = config.kind;
-        let gain = if kind.has_p() { config.k } else { 1.0 };
-        let dn = config.td + config.n * config.h;
-        let f = T::from_f64;
-        self.kp = f(if kind.has_p() { s * config.k } else { 0.0 });
-        self.b = f(config.b);
-        self.c = f(config.c);
-        // Same operation order as the reference algorithm (s·bi, s·bd), so f64 results agree
-        // to the last bit.
-        self.bi = f(if kind.has_i() {
-            s * (gain * config.h / config.ti)
-        } else {
-            0.0
-        });
-        self.ad = f(if kind.has_d() { config.td / dn } else { 0.0 });
-        self.bd = f(if kind.has_d() {
-            s * (gain * config.td * config.n / dn)
-        } else {
-            0.0
-        });
-        self.ao = f(if kind.has_i() {
-            config.h / config.tt.unwrap_or(config.h)
-        } else {
-            0.0
-        });
-        self.ymin = f(config.ymin);
-        self.ymax = f(config.ymax);
-        self.has_dymax = config.dymax.is_some();
-        self.dymax = f(config.dymax.unwrap_or(0.0));
+    fn apply(&mut self, k: Coefficients<T>) {
+        self.kp = k.kp;
+        self.b = k.b;
+        self.c = k.c;
+        self.bi = k.bi;
+        self.ad = k.ad;
+        self.bd = k.bd;
+        self.ao = k.ao;
+        self.ymin = k.ymin;
+        self.ymax = k.ymax;
+        self.has_dymax = k.dymax.is_some();
+        self.dymax = k.dymax.unwrap_or(T::ZERO);
+        self.offset_slope = k.offset_slope;
+        self.i_lo = k.i_lo;
+        self.i_hi = k.i_hi;
+        self.d_bound = k.d_bound;
+        self.integrates = k.integrates;
     }
 
     /// One sample: the output for set-point `r` and measurement `y`.
@@ -232,23 +394,36 @@ impl<T: Scalar> Pid<T> {
         self.step::<true>(setpoint, measurement, inputs.feedforward, inputs.track)
     }
 
+    /// The integral's bounds at set-point `r`: [`STATE_BOUND`] output scales beyond the values
+    /// that hold the output at a limit in steady state.
+    #[inline(always)]
+    fn integral_bounds(&self, r: T, feedforward: T) -> (T, T) {
+        let center = self.offset_slope.mul(r).sub(feedforward);
+        (self.i_lo.add(center), self.i_hi.add(center))
+    }
+
     #[inline(always)]
     fn step<const FEEDFORWARD: bool>(&mut self, r: T, y: T, feedforward: T, track: Option<T>) -> T {
-        if !self.started {
-            self.y_old = y;
-            self.r_old = r;
-            self.started = true;
-        }
+        // Nothing is stored until the result is known to be finite: a NaN on the first sample
+        // must not become y_old.
+        let (y_old, r_old) = if self.started {
+            (self.y_old, self.r_old)
+        } else {
+            (y, r)
+        };
         let p = self.kp.mul(self.b.mul(r).sub(y));
-        let change = y
-            .sub(self.c.mul(r))
-            .sub(self.y_old.sub(self.c.mul(self.r_old)));
-        let d = self.ad.mul(self.d).sub(self.bd.mul(change)).flush_tiny();
-        let (v, u, i) = match self.mode {
+        let change = y.sub(self.c.mul(r)).sub(y_old.sub(self.c.mul(r_old)));
+        let d = self
+            .ad
+            .mul(self.d)
+            .sub(self.bd.mul(change))
+            .flush_tiny()
+            .clamp_within(T::ZERO.sub(self.d_bound), self.d_bound);
+        let (v, u, i, manual) = match self.mode {
             Mode::Manual => {
                 // The operator's output stands; I follows so that v = u when auto returns.
                 let u = self.u_old;
-                (u, u, u.sub(p).sub(d))
+                (u, u, u.sub(p).sub(d), true)
             }
             Mode::Auto => {
                 let mut v = p.add(self.i).add(d);
@@ -263,22 +438,42 @@ impl<T: Scalar> Pid<T> {
                 let applied = track.unwrap_or(u);
                 // I + (integral step + tracking), summed in the reference's order.
                 let step = self.bi.mul(r.sub(y)).add(self.ao.mul(applied.sub(v)));
-                let i = self.i.add(step);
-                (v, u, i)
+                (v, u, self.i.add(step), false)
             }
         };
-        // A NaN or infinite set-point or measurement reaches v or I whatever the coefficients
-        // (0·∞ is NaN), so two checks guard both inputs and overflow.
+        // P is NaN or infinite whenever r or y is (0·∞ is NaN), and both v and the unbounded I
+        // contain P: two checks guard both inputs and overflow, before any clamp could turn an
+        // infinity into a finite bound.
         if !T::both_finite(v, i) {
             self.fault(r, y);
             return self.u_old;
         }
+        let i = if self.integrates || manual {
+            // The bounds move with the set-point; an absurd one can overflow them.
+            let (lo, hi) = self.integral_bounds(r, feedforward);
+            let bounded = i.clamp_within(lo, hi);
+            if !bounded.is_finite() {
+                self.fault(r, y);
+                return self.u_old;
+            }
+            bounded
+        } else {
+            i
+        };
+        self.started = true;
         self.i = i;
         self.d = d;
         self.y_old = y;
         self.r_old = r;
         self.u_old = track.unwrap_or(u);
         u
+    }
+
+    /// A sample whose measurement could not be converted (not finite): the output is held and
+    /// the non-finite-input fault raised, as [`update`](Pid::update) does.
+    pub(crate) fn note_non_finite_input(&mut self) -> T {
+        self.faults.0 |= Faults::NON_FINITE_INPUT;
+        self.u_old
     }
 
     #[cold]
@@ -290,25 +485,51 @@ impl<T: Scalar> Pid<T> {
         };
     }
 
+    /// `i` within the integral's bounds at the last set-point, or for a kind without I (whose
+    /// bias a spike must not hold at a limit for good) within [`STATE_BOUND`] scales of the output
+    /// limits; a non-finite `i` (a new gain so large that the bumpless adjustment overflowed)
+    /// becomes the nearest in-bound value to 0.
+    fn bounded_integral(&self, i: T) -> T {
+        // A kind without I never moves its bias again, so the bias's bounds must not follow a
+        // set-point that may have been absurd: they sit around the output limits themselves.
+        let r = if self.integrates { self.r_old } else { T::ZERO };
+        let (lo, hi) = self.integral_bounds(r, T::ZERO);
+        if !T::both_finite(lo, hi) {
+            return T::ZERO;
+        }
+        if i.is_finite() {
+            i.clamp_within(lo, hi)
+        } else {
+            T::ZERO.clamp_within(lo, hi)
+        }
+    }
+
     /// Changes the parameters, bumplessly: the integral is adjusted so that the output would
     /// not jump if the set-point and measurement stayed as at the last sample (a change of K
-    /// or b moves P, the integral takes up the difference). A kind without an I term has its
-    /// integral set to 0, one without a D term its derivative state; the state is otherwise kept.
+    /// or b moves P, the integral takes up the difference). This holds for every kind: one
+    /// without an I term keeps the adjusted value as a constant bias (its manual reset), so a
+    /// bias set by a manual → auto switch survives a change of gain. A derivative state that
+    /// the new kind lacks is dropped, into the integral where there is one. The held output is
+    /// clamped into the new limits at once (in manual mode too).
+    ///
     /// On an error nothing changes.
-    pub fn set_config(&mut self, config: &Config) -> Result<(), ConfigError> {
-        config.validate()?;
+    pub fn set_config<F: Real>(&mut self, config: &Config<F>) -> Result<(), ConfigError<F>> {
+        let k = Coefficients::<T>::new(config)?;
         let p_before = self.proportional(self.r_old, self.y_old);
-        self.set_coefficients(config);
-        if self.started && config.kind.has_i() {
+        self.apply(k);
+        let mut i = self.i;
+        if self.started {
             let p_after = self.proportional(self.r_old, self.y_old);
-            self.i = self.i.add(p_before).sub(p_after);
-        }
-        if !config.kind.has_i() {
-            self.i = T::ZERO;
+            i = i.add(p_before).sub(p_after);
         }
         if !config.kind.has_d() {
+            if config.kind.has_i() {
+                i = i.add(self.d);
+            }
             self.d = T::ZERO;
         }
+        self.i = self.bounded_integral(i);
+        self.u_old = self.u_old.clamp_within(self.ymin, self.ymax);
         Ok(())
     }
 
@@ -327,11 +548,11 @@ impl<T: Scalar> Pid<T> {
     }
 
     /// Switches back to automatic, bumplessly: the integral is set so that the next output
-    /// starts from the manual one.
+    /// starts from the manual one (within its bounds, see [`STATE_BOUND`]).
     pub fn set_auto(&mut self) {
         if self.mode == Mode::Manual && self.started {
             let p = self.proportional(self.r_old, self.y_old);
-            self.i = self.u_old.sub(p).sub(self.d);
+            self.i = self.bounded_integral(self.u_old.sub(p).sub(self.d));
         }
         self.mode = Mode::Auto;
     }
@@ -375,6 +596,8 @@ impl<T: Scalar> Pid<T> {
     pub fn reset(&mut self) {
         self.i = T::ZERO;
         self.d = T::ZERO;
+        self.y_old = T::ZERO;
+        self.r_old = T::ZERO;
         self.started = false;
         self.mode = Mode::Auto;
         self.faults = Faults::default();
@@ -385,7 +608,7 @@ impl<T: Scalar> Pid<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::{Action, Kind};
+    use crate::config::Kind;
 
     fn pi() -> Config {
         Config {
@@ -400,12 +623,10 @@ mod tests {
     }
 
     #[test]
-    fn pid_f32_is_64_bytes() {
-        assert!(
-            core::mem::size_of::<Pid<f32>>() <= 64,
-            "{}",
-            core::mem::size_of::<Pid<f32>>()
-        );
+    fn size_is_19_values_and_5_bytes_padded() {
+        // 19 values of T, then 3 flags, the mode and the faults (5 bytes), padded to T's alignment.
+        assert_eq!(core::mem::size_of::<Pid<f32>>(), 19 * 4 + 8);
+        assert_eq!(core::mem::size_of::<Pid<f64>>(), 19 * 8 + 8);
     }
 
     #[test]
@@ -600,12 +821,24 @@ mod tests {
             assert!((ua - uc).abs() < 0.05, "{k}: {ua} {uc}");
             y += 0.5 * (0.8 * ua - y) * 0.5;
         }
-        // Saturation instead of overflow with absurd inputs.
-        let mut s = Pid::<I16F16>::new(&Config {
+        // A gain I16F16 cannot hold is refused, naming the parameter; one it can hold
+        // saturates instead of overflowing with absurd inputs.
+        let too_big = Config {
             k: 30000.0,
             ..config
-        })
-        .unwrap();
-        assert_eq!(s.update(I16F16::MAX, I16F16::MIN), I16F16::from_num(1.0));
+        };
+        assert!(matches!(
+            Pid::<I16F16>::new(&too_big),
+            Err(ConfigError::Unrepresentable {
+                parameter: Parameter::Td,
+                ..
+            })
+        ));
+        let mut s = Pid::<I16F16>::new(&Config { td: 0.0, ..too_big }).unwrap();
+        assert_eq!(
+            s.update(I16F16::MAX, I16F16::MIN),
+            I16F16::from_num(1.0),
+            "rate-limited from 0"
+        );
     }
 }

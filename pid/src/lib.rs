@@ -15,12 +15,14 @@ mod alarm;
 mod config;
 mod controller;
 mod operator;
+mod real;
 mod scalar;
 mod scaling;
 
 pub use alarm::{Alarm, AlarmState};
 pub use config::{Action, Config, ConfigError, Kind, Parameter};
-pub use controller::{Faults, Inputs, Mode, Pid, ValueError};
-pub use operator::{Code, EditError, OperatorLimits, Parameters, Staged, Station};
+pub use controller::{Faults, Inputs, Mode, Pid, STATE_BOUND, TOLERANCE, ValueError};
+pub use operator::{Code, EditError, OperatorLimits, Parameters, Requirement, Staged, Station};
+pub use real::Real;
 pub use scalar::Scalar;
 pub use scaling::{ADC_FULL_SCALE, DAC_FULL_SCALE, SPAN_VOLTS, Scaling, ScalingError};

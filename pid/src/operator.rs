@@ -1,12 +1,17 @@
 //! The operator layer of the 1985 controller: parameters edited by code into a shadow set, each
 //! edit checked on its own, all committed at once at a sample boundary; and the station that
 //! ties controller, parameters, alarm and scaling together.
+#![allow(
+    clippy::arithmetic_side_effects,
+    reason = "arithmetic here is on Real (sealed: f32 or f64), which cannot panic or wrap; an overflow is an infinity, and every path checks finiteness"
+)]
 
 use core::fmt;
 
 use crate::alarm::{Alarm, AlarmState};
-use crate::config::{Config, ConfigError, Kind};
+use crate::config::{Config, ConfigError, Kind, Parameter};
 use crate::controller::{Inputs, Pid};
+use crate::real::Real;
 use crate::scalar::Scalar;
 use crate::scaling::Scaling;
 
@@ -119,26 +124,44 @@ impl fmt::Display for Code {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct OperatorLimits {
+pub struct OperatorLimits<F = f64> {
     /// KP range.
-    pub kp: (f64, f64),
+    pub kp: (F, F),
     /// TI and TD range, seconds.
-    pub time: (f64, f64),
+    pub time: (F, F),
     /// Sample period range, seconds.
-    pub sample: (f64, f64),
+    pub sample: (F, F),
     /// Output range (YMIN, YMAX), volts.
-    pub output: (f64, f64),
+    pub output: (F, F),
 }
 
-impl Default for OperatorLimits {
+impl<F: Real> Default for OperatorLimits<F> {
     /// The source's: KP −1..10000, TI and TD 0..10⁷ s, S 1..255 s, output 0..10 V.
-    fn default() -> OperatorLimits {
+    fn default() -> OperatorLimits<F> {
+        let n = F::from_u16;
         OperatorLimits {
-            kp: (-1.0, 10_000.0),
-            time: (0.0, 1e7),
-            sample: (1.0, 255.0),
-            output: (0.0, 10.0),
+            kp: (-n(1), n(10_000)),
+            time: (n(0), n(10_000) * n(1000)),
+            sample: (n(1), n(255)),
+            output: (n(0), n(10)),
         }
+    }
+}
+
+impl<F: Real> OperatorLimits<F> {
+    /// Checks that every range is finite and ordered; the error names the range.
+    pub fn validate(&self) -> Result<(), EditError<F>> {
+        for (range, (min, max)) in [
+            ("KP", self.kp),
+            ("TI/TD", self.time),
+            ("S", self.sample),
+            ("YMIN/YMAX", self.output),
+        ] {
+            if !(min.is_finite() && max.is_finite() && min <= max) {
+                return Err(EditError::BadLimits { range, min, max });
+            }
+        }
+        Ok(())
     }
 }
 
@@ -146,23 +169,71 @@ impl Default for OperatorLimits {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Parameters {
+pub struct Parameters<F = f64> {
     /// The controller.
-    pub config: Config,
+    pub config: Config<F>,
     /// WIN, in scale units.
-    pub setpoint: f64,
+    pub setpoint: F,
     /// RFEL, the largest error before the alarm, in scale units (≥ 0).
-    pub rfel: f64,
+    pub rfel: F,
     /// Night set-back: subtracted from WIN while the station's night input is on (the
     /// source's wish for two set-points chosen by a digital input); 0 for none.
-    pub night_setback: f64,
+    pub night_setback: F,
 }
 
-/// An operator's edit that was refused. The shadow set is unchanged.
+/// What a refused value must be (part of [`EditError::IllegalValue`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
-pub enum EditError {
+pub enum Requirement<F = f64> {
+    /// A finite number.
+    Finite,
+    /// Zero or more.
+    NonNegative,
+    /// Within the operator's limits for the parameter.
+    Within {
+        /// Lowest allowed.
+        min: F,
+        /// Highest allowed.
+        max: F,
+    },
+    /// On the measurement scale, SCALEMIN..SCALEMAX.
+    OnScale {
+        /// SCALEMIN.
+        min: F,
+        /// SCALEMAX.
+        max: F,
+    },
+    /// At most YMAX (for YMIN).
+    AtMostYmax(F),
+    /// At least YMIN (for YMAX).
+    AtLeastYmin(F),
+    /// A value that leaves the whole configuration valid; the inner error says which
+    /// parameter breaks it and why.
+    ValidConfig(ConfigError<F>),
+}
+
+impl<F: Real> fmt::Display for Requirement<F> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Requirement::Finite => f.write_str("a finite number"),
+            Requirement::NonNegative => f.write_str(">= 0"),
+            Requirement::Within { min, max } => write!(f, "within {min}..{max}"),
+            Requirement::OnScale { min, max } => {
+                write!(f, "between SCALEMIN {min} and SCALEMAX {max}")
+            }
+            Requirement::AtMostYmax(ymax) => write!(f, "<= YMAX ({ymax})"),
+            Requirement::AtLeastYmin(ymin) => write!(f, ">= YMIN ({ymin})"),
+            Requirement::ValidConfig(e) => write!(f, "such that {e}"),
+        }
+    }
+}
+
+/// An operator's edit, or a starting set, that was refused. The shadow set is unchanged.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum EditError<F = f64> {
     /// No parameter has this code (the source's WRONG CODE).
     UnknownCode(u8),
     /// Y and XIN can be shown, not changed (WRONG COMMAND).
@@ -172,31 +243,68 @@ pub enum EditError {
         /// The parameter.
         code: Code,
         /// The value keyed.
-        value: f64,
+        value: F,
         /// What it must be.
-        requirement: &'static str,
+        requirement: Requirement<F>,
     },
     /// TYP was given a value through the number path; use [`Staged::edit_kind`].
     NotANumber(Code),
+    /// A starting configuration that does not validate, or that the controller's number type
+    /// cannot hold; names the parameter.
+    Config(ConfigError<F>),
+    /// A starting night set-back that is negative or not finite.
+    NightSetback(F),
+    /// One of the [`OperatorLimits`] is not finite or has min > max.
+    BadLimits {
+        /// Which range: "KP", "TI/TD", "S" or "YMIN/YMAX".
+        range: &'static str,
+        /// Its lower end.
+        min: F,
+        /// Its upper end.
+        max: F,
+    },
 }
 
-impl EditError {
+impl<F> EditError<F> {
+    /// The operator code the error is about, where there is one (a configuration error on
+    /// N, b, c or Tt has none: those are not on the keypad).
+    #[must_use]
+    pub const fn code(&self) -> Option<Code> {
+        match self {
+            EditError::ReadOnly(code)
+            | EditError::NotANumber(code)
+            | EditError::IllegalValue { code, .. } => Some(*code),
+            EditError::Config(e) => code_of(e.parameter()),
+            EditError::UnknownCode(_)
+            | EditError::NightSetback(_)
+            | EditError::BadLimits { .. } => None,
+        }
+    }
+
     /// The source's display message for the error.
     #[must_use]
     pub const fn display_message(&self) -> &'static str {
         match self {
             EditError::UnknownCode(_) => "WRONG CODE",
             EditError::ReadOnly(_) | EditError::NotANumber(_) => "WRONG COMMAND",
-            EditError::IllegalValue { .. } => "ILLEGAL VALUE",
+            EditError::IllegalValue { .. }
+            | EditError::Config(_)
+            | EditError::NightSetback(_)
+            | EditError::BadLimits { .. } => "ILLEGAL VALUE",
         }
     }
 }
 
-impl fmt::Display for EditError {
+impl<F: Real> fmt::Display for EditError<F> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match *self {
+        match self {
             EditError::UnknownCode(n) => write!(f, "WRONG CODE: no parameter has code {n}"),
             EditError::ReadOnly(code) => write!(f, "WRONG COMMAND: {code} is read only"),
+            EditError::IllegalValue {
+                code,
+                value,
+                requirement: Requirement::ValidConfig(e),
+            } => write!(f, "ILLEGAL VALUE: {} = {value} refused: {e}", code.name()),
             EditError::IllegalValue {
                 code,
                 value,
@@ -214,16 +322,41 @@ impl fmt::Display for EditError {
                     "WRONG COMMAND: {code} takes a controller type, not a number"
                 )
             }
+            EditError::Config(e) => write!(f, "ILLEGAL VALUE: {e}"),
+            EditError::NightSetback(v) => {
+                write!(
+                    f,
+                    "ILLEGAL VALUE: the night set-back must be finite and >= 0, got {v}"
+                )
+            }
+            EditError::BadLimits { range, min, max } => write!(
+                f,
+                "ILLEGAL VALUE: the operator limits for {range} must be finite with min <= max, got {min}..{max}"
+            ),
         }
     }
 }
 
-impl core::error::Error for EditError {}
+impl<F: Real> core::error::Error for EditError<F> {}
+
+/// The operator code that edits a [`Config`] parameter, if any.
+const fn code_of(parameter: Parameter) -> Option<Code> {
+    Some(match parameter {
+        Parameter::K => Code::Kp,
+        Parameter::Ti => Code::Ti,
+        Parameter::Td => Code::Td,
+        Parameter::H => Code::S,
+        Parameter::Ymin => Code::Ymin,
+        Parameter::Ymax => Code::Ymax,
+        Parameter::Dymax => Code::Dymax,
+        _ => return None,
+    })
+}
 
 /// The shadow (staged) parameter set of the source: the operator edits it parameter by
 /// parameter, each edit checked on its own against the source's limits; the controller runs on
 /// the active set until [`commit`](Staged::commit), after which a [`Station`] applies all
-/// changes at once at its next sample.
+/// changes at once at its next sample. In `f64` (the default) or `f32`.
 ///
 /// ```
 /// use regler_pid::{Code, Config, OperatorLimits, Parameters, Scaling, Staged};
@@ -232,29 +365,34 @@ impl core::error::Error for EditError {}
 /// let mut staged = Staged::new(active, scaling, OperatorLimits::default())?;
 /// staged.edit(Code::Win, 150.0)?;                        // * 21 * A 150 A
 /// assert_eq!(staged.active().setpoint, 100.0);          // still running on the old set
-/// assert!(staged.edit(Code::Win, 250.0).is_err());       // ILLEGAL VALUE: above SCALEMAX
+/// let refused = staged.edit(Code::Win, 250.0).unwrap_err();
+/// assert_eq!(refused.to_string(), "ILLEGAL VALUE: WIN must be between SCALEMIN 0 and SCALEMAX 200, got 250");
 /// assert!(staged.edit(Code::Y, 1.0).is_err());           // read only
 /// staged.commit();                                       // key D
 /// assert_eq!(staged.take_commit().map(|p| p.setpoint), Some(150.0));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Staged {
-    active: Parameters,
-    shadow: Parameters,
-    scaling: Scaling,
-    limits: OperatorLimits,
+pub struct Staged<F = f64> {
+    active: Parameters<F>,
+    shadow: Parameters<F>,
+    scaling: Scaling<F>,
+    limits: OperatorLimits<F>,
     commit_requested: bool,
 }
 
-impl Staged {
-    /// Staged parameters starting from `active` (checked: the config must validate, the
-    /// set-point lie on the scale, RFEL be finite and ≥ 0).
+impl<F: Real> Staged<F> {
+    /// Staged parameters starting from `active`. Checked: the limits themselves
+    /// ([`OperatorLimits::validate`]), the config ([`Config::validate`], the error names the
+    /// parameter), each operator value within its limits, the set-point on the scale, RFEL and
+    /// the night set-back finite and ≥ 0.
     pub fn new(
-        active: Parameters,
-        scaling: Scaling,
-        limits: OperatorLimits,
-    ) -> Result<Staged, EditError> {
+        active: Parameters<F>,
+        scaling: Scaling<F>,
+        limits: OperatorLimits<F>,
+    ) -> Result<Staged<F>, EditError<F>> {
+        limits.validate()?;
+        active.config.validate().map_err(EditError::Config)?;
         let staged = Staged {
             active,
             shadow: active,
@@ -262,39 +400,69 @@ impl Staged {
             limits,
             commit_requested: false,
         };
-        staged.check_whole(Code::Typ, active)?;
-        if !scaling.contains(active.setpoint) {
+        let c = active.config;
+        let nonneg = |v: F| v.is_finite() && v >= F::zero();
+        let checks = [
+            (
+                Code::Win,
+                active.setpoint,
+                scaling.contains(active.setpoint),
+            ),
+            (Code::Rfel, active.rfel, nonneg(active.rfel)),
+            (Code::S, c.h, within(limits.sample, c.h)),
+            (Code::Kp, c.k, within(limits.kp, c.k)),
+            (Code::Td, c.td, within(limits.time, c.td)),
+            (Code::Ymin, c.ymin, within(limits.output, c.ymin)),
+            (Code::Ymax, c.ymax, within(limits.output, c.ymax)),
+        ];
+        for (code, value, ok) in checks {
+            if !ok {
+                return Err(EditError::IllegalValue {
+                    code,
+                    value,
+                    requirement: staged.requirement(code),
+                });
+            }
+        }
+        if c.kind.has_i() && !within(limits.time, c.ti) {
             return Err(EditError::IllegalValue {
-                code: Code::Win,
-                value: active.setpoint,
-                requirement: "between SCALEMIN and SCALEMAX",
+                code: Code::Ti,
+                value: c.ti,
+                requirement: staged.requirement(Code::Ti),
             });
         }
-        if !(active.rfel.is_finite() && active.rfel >= 0.0) {
-            return Err(EditError::IllegalValue {
-                code: Code::Rfel,
-                value: active.rfel,
-                requirement: "a finite value >= 0",
-            });
-        }
-        if !(active.night_setback.is_finite() && active.night_setback >= 0.0) {
-            return Err(EditError::IllegalValue {
-                code: Code::Win,
-                value: active.night_setback,
-                requirement: "a night set-back that is finite and >= 0",
-            });
+        if !nonneg(active.night_setback) {
+            return Err(EditError::NightSetback(active.night_setback));
         }
         Ok(staged)
     }
 
+    /// What a value for `code` must be, with this station's own limits and scale.
+    fn requirement(&self, code: Code) -> Requirement<F> {
+        let l = self.limits;
+        let range = |(min, max): (F, F)| Requirement::Within { min, max };
+        match code {
+            Code::Win => Requirement::OnScale {
+                min: self.scaling.min(),
+                max: self.scaling.max(),
+            },
+            Code::S => range(l.sample),
+            Code::Kp => range(l.kp),
+            Code::Td | Code::Ti => range(l.time),
+            Code::Ymin | Code::Ymax => range(l.output),
+            Code::Rfel | Code::Dymax => Requirement::NonNegative,
+            Code::Typ | Code::Y | Code::Xin => Requirement::Finite,
+        }
+    }
+
     /// Edits one parameter of the shadow set by its code number (as keyed).
-    pub fn edit_number(&mut self, code: u8, value: f64) -> Result<(), EditError> {
+    pub fn edit_number(&mut self, code: u8, value: F) -> Result<(), EditError<F>> {
         let code = Code::from_number(code).ok_or(EditError::UnknownCode(code))?;
         self.edit(code, value)
     }
 
     /// Edits one parameter of the shadow set. TYP goes through [`edit_kind`](Staged::edit_kind).
-    pub fn edit(&mut self, code: Code, value: f64) -> Result<(), EditError> {
+    pub fn edit(&mut self, code: Code, value: F) -> Result<(), EditError<F>> {
         let illegal = |requirement| EditError::IllegalValue {
             code,
             value,
@@ -303,66 +471,65 @@ impl Staged {
         if !code.writable() {
             return Err(EditError::ReadOnly(code));
         }
-        if !value.is_finite() {
-            return Err(illegal("a finite number"));
+        if code == Code::Typ {
+            return Err(EditError::NotANumber(code));
         }
-        let within = |(lo, hi): (f64, f64)| value >= lo && value <= hi;
+        if !value.is_finite() {
+            return Err(illegal(Requirement::Finite));
+        }
         let l = self.limits;
         let mut next = self.shadow;
-        match code {
-            Code::Typ => return Err(EditError::NotANumber(code)),
-            Code::Win if self.scaling.contains(value) => next.setpoint = value,
-            Code::Win => return Err(illegal("between SCALEMIN and SCALEMAX")),
-            Code::S if within(l.sample) => next.config.h = value,
-            Code::S => return Err(illegal("within the sample-period limits (1-255 s)")),
-            Code::Rfel => next.rfel = value.abs(),
-            Code::Kp if within(l.kp) => next.config.k = value,
-            Code::Kp => return Err(illegal("within the KP limits (-1..10000)")),
-            Code::Td if within(l.time) => next.config.td = value,
-            Code::Td => return Err(illegal("within the time limits (0..1e7 s)")),
-            Code::Ti if within(l.time) => next.config.ti = value,
-            Code::Ti => return Err(illegal("within the time limits (0..1e7 s)")),
-            Code::Ymin if within(l.output) && value <= next.config.ymax => next.config.ymin = value,
-            Code::Ymin => return Err(illegal("within the output range and <= YMAX")),
-            Code::Ymax if within(l.output) && value >= next.config.ymin => next.config.ymax = value,
-            Code::Ymax => return Err(illegal("within the output range and >= YMIN")),
-            Code::Dymax => {
-                // The source takes the magnitude; 0 here means no limit (the source's 0 froze
-                // the output, which no operator wants).
-                let v = value.abs();
-                next.config.dymax = if v == 0.0 { None } else { Some(v) };
-            }
-            Code::Y | Code::Xin => return Err(EditError::ReadOnly(code)),
+        let in_range = match code {
+            Code::Win => self.scaling.contains(value),
+            Code::S => within(l.sample, value),
+            Code::Kp => within(l.kp, value),
+            Code::Td | Code::Ti => within(l.time, value),
+            Code::Ymin | Code::Ymax => within(l.output, value),
+            _ => true,
+        };
+        if !in_range {
+            return Err(illegal(self.requirement(code)));
         }
-        self.check_whole(code, next)?;
+        match code {
+            Code::Win => next.setpoint = value,
+            Code::S => next.config.h = value,
+            // The source takes the magnitude of RFEL and DYMAX.
+            Code::Rfel => next.rfel = value.abs(),
+            Code::Kp => next.config.k = value,
+            Code::Td => next.config.td = value,
+            Code::Ti => next.config.ti = value,
+            Code::Ymin if value > next.config.ymax => {
+                return Err(illegal(Requirement::AtMostYmax(next.config.ymax)));
+            }
+            Code::Ymin => next.config.ymin = value,
+            Code::Ymax if value < next.config.ymin => {
+                return Err(illegal(Requirement::AtLeastYmin(next.config.ymin)));
+            }
+            Code::Ymax => next.config.ymax = value,
+            // 0 means no limit, here as in Config (the source's 0 froze the output).
+            Code::Dymax => next.config.dymax = Some(value.abs()).filter(|d| *d > F::zero()),
+            Code::Typ | Code::Y | Code::Xin => return Err(EditError::ReadOnly(code)),
+        }
+        next.config
+            .validate()
+            .map_err(|e| illegal(Requirement::ValidConfig(e)))?;
         self.shadow = next;
         Ok(())
     }
 
     /// Sets TYP in the shadow set. Refused if the kind needs a TI > 0 and the shadow TI is 0.
-    pub fn edit_kind(&mut self, kind: Kind) -> Result<(), EditError> {
+    pub fn edit_kind(&mut self, kind: Kind) -> Result<(), EditError<F>> {
         let mut next = self.shadow;
         next.config.kind = kind;
-        self.check_whole(Code::Typ, next)?;
+        next.config
+            .validate()
+            .map_err(|e| EditError::IllegalValue {
+                code: Code::Typ,
+                value: F::from_u16(u16::from(kind_number(kind))),
+                requirement: Requirement::ValidConfig(e),
+            })?;
         self.shadow = next;
         Ok(())
-    }
-
-    fn check_whole(&self, code: Code, next: Parameters) -> Result<(), EditError> {
-        next.config.validate().map_err(|e| EditError::IllegalValue {
-            code,
-            value: match e {
-                ConfigError::NotFinite { value, .. } | ConfigError::OutOfRange { value, .. } => {
-                    value
-                }
-                ConfigError::LimitsReversed { ymin, .. } => ymin,
-            },
-            requirement: match e {
-                ConfigError::OutOfRange { requirement, .. } => requirement,
-                ConfigError::LimitsReversed { .. } => "such that YMIN <= YMAX",
-                _ => "a finite number",
-            },
-        })
     }
 
     /// The operator is done (key D, the source's POP): the shadow set becomes active at the
@@ -390,7 +557,7 @@ impl Staged {
     }
 
     /// At a sample boundary: the parameters to apply now, if the operator committed.
-    pub fn take_commit(&mut self) -> Option<Parameters> {
+    pub fn take_commit(&mut self) -> Option<Parameters<F>> {
         if !self.commit_requested {
             return None;
         }
@@ -399,33 +566,57 @@ impl Staged {
         Some(self.active)
     }
 
+    /// A commit the controller could not apply: `previous` is active again, the shadow set
+    /// keeps the refused values for the operator to correct.
+    fn refuse_commit(&mut self, previous: Parameters<F>) {
+        self.active = previous;
+    }
+
     /// The parameters the controller runs on.
     #[must_use]
-    pub const fn active(&self) -> &Parameters {
+    pub const fn active(&self) -> &Parameters<F> {
         &self.active
     }
 
     /// The shadow set being edited.
     #[must_use]
-    pub const fn shadow(&self) -> &Parameters {
+    pub const fn shadow(&self) -> &Parameters<F> {
         &self.shadow
     }
 
     /// The active value of a numeric parameter (`None` for TYP, Y and XIN, which a
     /// [`Station`] knows).
     #[must_use]
-    pub fn active_value(&self, code: Code) -> Option<f64> {
+    pub fn active_value(&self, code: Code) -> Option<F> {
         value_of(&self.active, code)
     }
 
     /// The measurement scale.
     #[must_use]
-    pub const fn scaling(&self) -> Scaling {
+    pub const fn scaling(&self) -> Scaling<F> {
         self.scaling
+    }
+
+    /// The operator limits.
+    #[must_use]
+    pub const fn limits(&self) -> OperatorLimits<F> {
+        self.limits
     }
 }
 
-fn value_of(p: &Parameters, code: Code) -> Option<f64> {
+fn within<F: Real>((lo, hi): (F, F), value: F) -> bool {
+    value >= lo && value <= hi
+}
+
+/// The source's Q code of a kind (1–7).
+fn kind_number(kind: Kind) -> u8 {
+    (1u8..)
+        .zip(Kind::ALL)
+        .find(|(_, k)| *k == kind)
+        .map_or(0, |(n, _)| n)
+}
+
+fn value_of<F: Real>(p: &Parameters<F>, code: Code) -> Option<F> {
     Some(match code {
         Code::Win => p.setpoint,
         Code::S => p.config.h,
@@ -435,7 +626,7 @@ fn value_of(p: &Parameters, code: Code) -> Option<f64> {
         Code::Ti => p.config.ti,
         Code::Ymin => p.config.ymin,
         Code::Ymax => p.config.ymax,
-        Code::Dymax => p.config.dymax.unwrap_or(0.0),
+        Code::Dymax => p.config.dymax.unwrap_or(F::zero()),
         Code::Typ | Code::Y | Code::Xin => return None,
     })
 }
@@ -445,10 +636,14 @@ fn value_of(p: &Parameters, code: Code) -> Option<f64> {
 /// [`sample`](Station::sample) every S seconds, which applies a pending commit first, so all
 /// changes land together at a sample boundary, bumplessly.
 ///
+/// `T` is the controller's number type, `F` the operator layer's (`f64` by default). A
+/// `Station<f32, f32>` does all its work in `f32`, so a single-precision FPU runs it without any
+/// soft-float `f64` routine.
+///
 /// ```
 /// use regler_pid::{AlarmState, Code, Config, OperatorLimits, Parameters, Scaling, Station};
-/// let params = Parameters { config: Config::default(), setpoint: 20.0, rfel: 2.0, night_setback: 0.0 };
-/// let mut station = Station::<f32>::new(params, Scaling::new(0.0, 40.0)?, OperatorLimits::default())?;
+/// let params = Parameters { config: Config::default(), setpoint: 20.0f32, rfel: 2.0, night_setback: 0.0 };
+/// let mut station = Station::<f32, f32>::new(params, Scaling::new(0.0, 40.0)?, OperatorLimits::default())?;
 /// let y = station.sample(15.0);               // 5 degrees below: an alarm, and heat
 /// assert!(y > 0.0);
 /// assert_eq!(station.alarm().state(), AlarmState::Blinking);
@@ -461,31 +656,29 @@ fn value_of(p: &Parameters, code: Code) -> Option<f64> {
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Clone, Debug)]
-pub struct Station<T> {
+pub struct Station<T, F = f64> {
     pid: Pid<T>,
-    staged: Staged,
+    staged: Staged<F>,
     alarm: Alarm,
-    xin: f64,
-    y: f64,
+    xin: F,
+    y: F,
     commits: u32,
     night: bool,
-    feedforward: f64,
+    feedforward: F,
+    refused: Option<ConfigError<F>>,
 }
 
-impl<T: Scalar> Station<T> {
-    /// A station running `params` on `scaling` (fixed at start-up, as in the source).
+impl<T: Scalar, F: Real> Station<T, F> {
+    /// A station running `params` on `scaling` (fixed at start-up, as in the source). Checked as
+    /// [`Staged::new`], and the configuration must fit the controller's number type `T`.
     pub fn new(
-        params: Parameters,
-        scaling: Scaling,
-        limits: OperatorLimits,
-    ) -> Result<Station<T>, EditError> {
+        params: Parameters<F>,
+        scaling: Scaling<F>,
+        limits: OperatorLimits<F>,
+    ) -> Result<Station<T, F>, EditError<F>> {
         let staged = Staged::new(params, scaling, limits)?;
-        let pid = Pid::<T>::new(&params.config).map_err(|_| EditError::IllegalValue {
-            code: Code::Typ,
-            value: f64::NAN,
-            requirement: "a valid configuration",
-        })?;
-        let y = pid.output().to_f64();
+        let pid = Pid::<T>::new(&params.config).map_err(EditError::Config)?;
+        let y = pid.output().to_real();
         Ok(Station {
             pid,
             staged,
@@ -494,32 +687,49 @@ impl<T: Scalar> Station<T> {
             y,
             commits: 0,
             night: false,
-            feedforward: 0.0,
+            feedforward: F::zero(),
+            refused: None,
         })
     }
 
     /// One sample with the measurement `xin` in scale units; returns the output Y in volts.
-    /// A pending commit is applied first.
-    pub fn sample(&mut self, xin: f64) -> f64 {
+    /// A pending commit is applied first; one the controller cannot take (its numbers do not
+    /// fit `T`) is refused as a whole, the old set stays active, and
+    /// [`refused_commit`](Station::refused_commit) says why. A non-finite `xin` holds the output
+    /// and raises the controller's non-finite-input fault and the alarm.
+    pub fn sample(&mut self, xin: F) -> F {
+        let previous = self.staged.active;
         if let Some(p) = self.staged.take_commit() {
-            // Validated edit by edit and as a whole: set_config cannot refuse it.
-            let _ = self.pid.set_config(&p.config);
-            self.commits = self.commits.saturating_add(1);
+            match self.pid.set_config(&p.config) {
+                Ok(()) => {
+                    self.commits = self.commits.saturating_add(1);
+                    self.refused = None;
+                }
+                Err(e) => {
+                    self.staged.refuse_commit(previous);
+                    self.refused = Some(e);
+                }
+            }
         }
         let active = self.staged.active;
         let setpoint = self.setpoint();
         self.xin = xin;
-        let (r, y) = (T::from_f64(setpoint), T::from_f64(xin));
-        self.y = if self.feedforward == 0.0 {
-            self.pid.update(r, y)
+        let u = if xin.is_finite() {
+            let (r, y) = (T::from_real(setpoint), T::from_real(xin));
+            if self.feedforward == F::zero() {
+                self.pid.update(r, y)
+            } else {
+                let inputs = Inputs {
+                    feedforward: T::from_real(self.feedforward),
+                    track: None,
+                };
+                self.pid.update_with(r, y, inputs)
+            }
         } else {
-            let inputs = Inputs {
-                feedforward: T::from_f64(self.feedforward),
-                track: None,
-            };
-            self.pid.update_with(r, y, inputs)
-        }
-        .to_f64();
+            // Not converted: a fixed-point T would read NaN as 0.
+            self.pid.note_non_finite_input()
+        };
+        self.y = u.to_real();
         let error = setpoint - xin;
         // A NaN measurement is an alarm too: the operator must look.
         self.alarm
@@ -527,9 +737,15 @@ impl<T: Scalar> Station<T> {
         self.y
     }
 
+    /// Why the last commit was refused, if it was (cleared by the next commit that lands).
+    #[must_use]
+    pub const fn refused_commit(&self) -> Option<ConfigError<F>> {
+        self.refused
+    }
+
     /// The set-point in force: WIN, less the night set-back while the night input is on.
     #[must_use]
-    pub fn setpoint(&self) -> f64 {
+    pub fn setpoint(&self) -> F {
         let active = self.staged.active;
         if self.night {
             active.setpoint - active.night_setback
@@ -552,8 +768,8 @@ impl<T: Scalar> Station<T> {
     /// Feed-forward added to the controller's output from the next sample on, in volts (for
     /// outdoor compensation: the heat the building loses at the present outdoor temperature).
     /// A non-finite value is ignored and counts as 0.
-    pub fn set_feedforward(&mut self, volts: f64) {
-        self.feedforward = if volts.is_finite() { volts } else { 0.0 };
+    pub fn set_feedforward(&mut self, volts: F) {
+        self.feedforward = if volts.is_finite() { volts } else { F::zero() };
     }
 
     /// The operator's acknowledge (key C).
@@ -562,19 +778,19 @@ impl<T: Scalar> Station<T> {
     }
 
     /// The staged parameters, to edit and commit.
-    pub fn staged_mut(&mut self) -> &mut Staged {
+    pub fn staged_mut(&mut self) -> &mut Staged<F> {
         &mut self.staged
     }
 
     /// The staged parameters.
     #[must_use]
-    pub const fn staged(&self) -> &Staged {
+    pub const fn staged(&self) -> &Staged<F> {
         &self.staged
     }
 
     /// The active value of a parameter; Y and XIN are the last sample's.
     #[must_use]
-    pub fn value(&self, code: Code) -> Option<f64> {
+    pub fn value(&self, code: Code) -> Option<F> {
         match code {
             Code::Y => Some(self.y),
             Code::Xin => Some(self.xin),
@@ -688,9 +904,12 @@ mod tests {
 
     #[test]
     fn messages_are_the_sources() {
-        assert_eq!(EditError::UnknownCode(1).display_message(), "WRONG CODE");
         assert_eq!(
-            EditError::ReadOnly(Code::Xin).display_message(),
+            EditError::<f64>::UnknownCode(1).display_message(),
+            "WRONG CODE"
+        );
+        assert_eq!(
+            EditError::<f64>::ReadOnly(Code::Xin).display_message(),
             "WRONG COMMAND"
         );
         let e = staged().edit(Code::Kp, 1e6).unwrap_err();
@@ -750,12 +969,22 @@ mod tests {
             rfel: 50.0,
             night_setback: 4.0,
         };
-        let mut st = Station::<f64>::new(
+        let wide = OperatorLimits {
+            output: (-100.0, 100.0),
+            ..OperatorLimits::default()
+        };
+        let err = Station::<f64>::new(
             params,
             Scaling::new(0.0, 40.0).unwrap(),
             OperatorLimits::default(),
         )
-        .unwrap();
+        .unwrap_err();
+        assert_eq!(err.code(), Some(Code::Ymin));
+        assert_eq!(
+            err.to_string(),
+            "ILLEGAL VALUE: YMIN must be within 0..10, got -100"
+        );
+        let mut st = Station::<f64>::new(params, Scaling::new(0.0, 40.0).unwrap(), wide).unwrap();
         assert_eq!(st.sample(18.0), 2.0);
         st.set_night(true);
         assert!(st.night());
@@ -769,13 +998,9 @@ mod tests {
             night_setback: -1.0,
             ..params
         };
-        assert!(
-            Staged::new(
-                bad,
-                Scaling::new(0.0, 40.0).unwrap(),
-                OperatorLimits::default()
-            )
-            .is_err()
+        assert_eq!(
+            Staged::new(bad, Scaling::new(0.0, 40.0).unwrap(), wide),
+            Err(EditError::NightSetback(-1.0))
         );
     }
 }

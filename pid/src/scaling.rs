@@ -1,27 +1,33 @@
 //! Scaling between converter counts and engineering units: a 12-bit A/D in, an 8-bit D/A out.
+#![allow(
+    clippy::arithmetic_side_effects,
+    reason = "arithmetic here is on Real (sealed: f32 or f64), which cannot panic or wrap; an overflow is an infinity, and every path checks finiteness"
+)]
 
 use core::fmt;
+
+use crate::real::Real;
 
 /// Full-scale count of the 12-bit A/D converter.
 pub const ADC_FULL_SCALE: u16 = 4095;
 /// Full-scale count of the 8-bit D/A converter.
 pub const DAC_FULL_SCALE: u8 = 255;
 /// The converters' span in volts (both 0–10 V in the source).
-pub const SPAN_VOLTS: f64 = 10.0;
+pub const SPAN_VOLTS: u16 = 10;
 
 /// Why a scaling could not be made or a value converted.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
-pub enum ScalingError {
+pub enum ScalingError<F = f64> {
     /// SCALEMIN or SCALEMAX is not finite.
     NotFinite,
     /// SCALEMAX ≤ SCALEMIN (the source: "SCALEMAX <= SCALEMIN ! TRY AGAIN").
     Reversed {
         /// SCALEMIN.
-        min: f64,
+        min: F,
         /// SCALEMAX.
-        max: f64,
+        max: F,
     },
     /// An A/D count above 4095.
     CountOutOfRange {
@@ -32,7 +38,7 @@ pub enum ScalingError {
     NotANumber,
 }
 
-impl fmt::Display for ScalingError {
+impl<F: Real> fmt::Display for ScalingError<F> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             ScalingError::NotFinite => f.write_str("SCALEMIN and SCALEMAX must be finite"),
@@ -53,13 +59,15 @@ impl fmt::Display for ScalingError {
     }
 }
 
-impl core::error::Error for ScalingError {}
+impl<F: Real> core::error::Error for ScalingError<F> {}
 
 /// The measurement's scale, fixed at start-up: 0 V (count 0) is SCALEMIN, 10 V (count 4095)
-/// is SCALEMAX. The output is in volts, 0–10 V, to an 8-bit D/A.
+/// is SCALEMAX. The output is in volts, 0–10 V, to an 8-bit D/A. In `f64` (the default) or `f32`.
 ///
-/// Rounding: A/D counts map linearly and exactly (in `f64`) to engineering units; volts map to
-/// the nearest D/A count, halves rounded up, clamped to 0–255.
+/// Rounding: A/D counts map linearly to engineering units (exactly in `f64`, to the nearest
+/// `f32` in `f32`); volts map to the nearest D/A count, halves rounded up, clamped to 0–255.
+/// Deserializing goes through [`Scaling::new`], so stored data with SCALEMAX ≤ SCALEMIN is an
+/// error, never a scale that divides by zero.
 ///
 /// ```
 /// use regler_pid::Scaling;
@@ -67,24 +75,51 @@ impl core::error::Error for ScalingError {}
 /// assert_eq!(room.count_to_units(4095)?, 40.0);
 /// assert_eq!(room.count_to_units(0)?, 0.0);
 /// assert_eq!(Scaling::volts_to_dac(5.0)?, 128); // 127.5 rounds up
-/// assert_eq!(Scaling::volts_to_dac(12.0)?, 255);
+/// assert_eq!(Scaling::volts_to_dac(12.0f32), Ok(255)); // f32 all the way
 /// # Ok::<(), regler_pid::ScalingError>(())
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Scaling {
-    min: f64,
-    max: f64,
+#[cfg_attr(
+    feature = "serde",
+    serde(
+        try_from = "RawScaling<F>",
+        bound(
+            serialize = "F: serde::Serialize",
+            deserialize = "F: Real + serde::Deserialize<'de>"
+        )
+    )
+)]
+pub struct Scaling<F = f64> {
+    min: F,
+    max: F,
 }
 
-impl Scaling {
+/// The stored form of a [`Scaling`], checked by [`Scaling::new`] on the way in.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct RawScaling<F> {
+    min: F,
+    max: F,
+}
+
+#[cfg(feature = "serde")]
+impl<F: Real> TryFrom<RawScaling<F>> for Scaling<F> {
+    type Error = ScalingError<F>;
+    fn try_from(raw: RawScaling<F>) -> Result<Scaling<F>, ScalingError<F>> {
+        Scaling::new(raw.min, raw.max)
+    }
+}
+
+impl<F: Real> Scaling<F> {
     /// The scale SCALEMIN..SCALEMAX.
-    pub fn new(scale_min: f64, scale_max: f64) -> Result<Scaling, ScalingError> {
+    pub fn new(scale_min: F, scale_max: F) -> Result<Scaling<F>, ScalingError<F>> {
         if !(scale_min.is_finite() && scale_max.is_finite()) {
             return Err(ScalingError::NotFinite);
         }
-        if scale_max <= scale_min {
+        // The span must be finite too, or every conversion is infinite or NaN.
+        if scale_max <= scale_min || !(scale_max - scale_min).is_finite() {
             return Err(ScalingError::Reversed {
                 min: scale_min,
                 max: scale_max,
@@ -98,67 +133,67 @@ impl Scaling {
 
     /// SCALEMIN.
     #[must_use]
-    pub const fn min(&self) -> f64 {
+    pub const fn min(&self) -> F {
         self.min
     }
 
     /// SCALEMAX.
     #[must_use]
-    pub const fn max(&self) -> f64 {
+    pub const fn max(&self) -> F {
         self.max
     }
 
     /// A 12-bit A/D count in engineering units.
-    pub fn count_to_units(&self, count: u16) -> Result<f64, ScalingError> {
+    pub fn count_to_units(&self, count: u16) -> Result<F, ScalingError<F>> {
         if count > ADC_FULL_SCALE {
             return Err(ScalingError::CountOutOfRange { count });
         }
-        Ok(self.min + (self.max - self.min) * f64::from(count) / f64::from(ADC_FULL_SCALE))
+        Ok(self.min + (self.max - self.min) * F::from_u16(count) / F::from_u16(ADC_FULL_SCALE))
     }
 
     /// An engineering value as the nearest A/D count (clamped to 0–4095), for simulators.
     #[must_use]
-    pub fn units_to_count(&self, units: f64) -> u16 {
+    pub fn units_to_count(&self, units: F) -> u16 {
         nearest_count((units - self.min) / (self.max - self.min), ADC_FULL_SCALE)
     }
 
     /// Whether `units` lies within the scale (the source's check of WIN).
     #[must_use]
-    pub fn contains(&self, units: f64) -> bool {
+    pub fn contains(&self, units: F) -> bool {
         units >= self.min && units <= self.max
     }
 
     /// Volts as the nearest 8-bit D/A count, halves up, clamped to 0–255.
-    pub fn volts_to_dac(volts: f64) -> Result<u8, ScalingError> {
+    pub fn volts_to_dac(volts: F) -> Result<u8, ScalingError<F>> {
         if volts.is_nan() {
             return Err(ScalingError::NotANumber);
         }
-        let count = nearest_count(volts / SPAN_VOLTS, u16::from(DAC_FULL_SCALE));
+        let count = nearest_count(volts / F::from_u16(SPAN_VOLTS), u16::from(DAC_FULL_SCALE));
         Ok(u8::try_from(count).unwrap_or(DAC_FULL_SCALE))
     }
 
     /// An 8-bit D/A count in volts.
     #[must_use]
-    pub fn dac_to_volts(count: u8) -> f64 {
-        f64::from(count) * SPAN_VOLTS / f64::from(DAC_FULL_SCALE)
+    pub fn dac_to_volts(count: u8) -> F {
+        F::from_u16(u16::from(count)) * F::from_u16(SPAN_VOLTS)
+            / F::from_u16(u16::from(DAC_FULL_SCALE))
     }
 }
 
 /// The converter count nearest to `fraction` of full scale: halves up, clamped to 0..=`full`,
 /// NaN as 0.
-fn nearest_count(fraction: f64, full: u16) -> u16 {
-    let x = fraction * f64::from(full);
-    if x.is_nan() || x <= 0.0 {
+fn nearest_count<F: Real>(fraction: F, full: u16) -> u16 {
+    let full_f = F::from_u16(full);
+    let x = fraction * full_f;
+    if x.is_nan() || x <= F::zero() {
         0
-    } else if x >= f64::from(full) {
+    } else if x >= full_f {
         full
     } else {
-        #[allow(
-            clippy::cast_possible_truncation,
-            reason = "0 < x + 0.5 < full + 1 <= 65536"
-        )]
-        let count = (x + 0.5) as u16;
-        count
+        // 0 < x + 0.5 < full + 1 <= 65536; the float-to-int conversion saturates in any case.
+        let half = F::from_u16(1) / F::from_u16(2);
+        // Truncation toward zero is the floor here, as x + 0.5 > 0.
+        num_traits::ToPrimitive::to_u16(&(x + half)).unwrap_or(full)
     }
 }
 
@@ -182,7 +217,7 @@ mod tests {
     fn every_dac_count_round_trips_and_halves_round_up() {
         for count in 0..=DAC_FULL_SCALE {
             assert_eq!(
-                Scaling::volts_to_dac(Scaling::dac_to_volts(count)),
+                Scaling::volts_to_dac(Scaling::<f64>::dac_to_volts(count)),
                 Ok(count)
             );
         }
@@ -196,7 +231,25 @@ mod tests {
     }
 
     #[test]
+    fn f32_scale_round_trips_every_count() {
+        let s = Scaling::new(0.0f32, 40.0).unwrap();
+        for count in 0..=ADC_FULL_SCALE {
+            assert_eq!(s.units_to_count(s.count_to_units(count).unwrap()), count);
+        }
+        for count in 0..=DAC_FULL_SCALE {
+            assert_eq!(
+                Scaling::volts_to_dac(Scaling::<f32>::dac_to_volts(count)),
+                Ok(count)
+            );
+        }
+    }
+
+    #[test]
     fn bad_scales_are_refused() {
+        assert!(
+            Scaling::new(-f64::MAX, f64::MAX).is_err(),
+            "an infinite span"
+        );
         assert_eq!(
             Scaling::new(5.0, 5.0),
             Err(ScalingError::Reversed { min: 5.0, max: 5.0 })

@@ -229,7 +229,7 @@ pub fn stage<T: Scalar>(station: &mut Station<T>, code: Code, text: &str) -> Res
         .map_err(|_| EditError::IllegalValue {
             code,
             value: f64::NAN,
-            requirement: "a number",
+            requirement: regler_pid::Requirement::Finite,
         })?;
     station.staged_mut().edit(code, value)
 }

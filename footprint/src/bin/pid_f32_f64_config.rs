@@ -1,0 +1,45 @@
+//! The same as `pid_f32`, but with the configuration in `f64`: what the f64-only API used to cost (six numbers from flash or EEPROM,
+//! here volatile reads the compiler cannot fold) and updated from a measurement it cannot
+//! predict: what firmware on a Cortex-M4F pays for the controller.
+#![no_std]
+#![no_main]
+
+use core::ptr::{addr_of, read_volatile, write_volatile};
+
+use cortex_m_rt::entry;
+use regler_pid::{Config, Kind, Pid};
+
+/// Parameters as stored: K, Ti, Td, h, ymin, ymax.
+static STORED: [f64; 6] = [2.0, 30.0, 1.0, 0.1, 0.0, 10.0];
+static mut MEASUREMENT: f32 = 0.0;
+static mut OUTPUT: f32 = 0.0;
+
+fn stored(i: usize) -> f64 {
+    // SAFETY-free: a volatile read of a static, so the configuration is a run-time value.
+    unsafe { read_volatile(addr_of!(STORED).cast::<f64>().add(i)) }
+}
+
+#[entry]
+fn main() -> ! {
+    let mut config = Config::<f64>::default();
+    config.kind = Kind::PID;
+    config.k = stored(0);
+    config.ti = stored(1);
+    config.td = stored(2);
+    config.h = stored(3);
+    config.ymin = stored(4);
+    config.ymax = stored(5);
+    let Ok(mut pid) = Pid::<f32>::new(&config) else {
+        loop {}
+    };
+    loop {
+        let y = unsafe { read_volatile(addr_of!(MEASUREMENT)) };
+        let u = pid.update(5.0, y);
+        unsafe { write_volatile(&raw mut OUTPUT, u) };
+    }
+}
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    loop {}
+}

@@ -1,0 +1,101 @@
+//! The number type of a configuration and of the operator layer: `f32` or `f64`.
+
+use core::fmt;
+
+use num_traits::float::FloatCore;
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for f32 {}
+    impl Sealed for f64 {}
+}
+
+/// A floating-point type a [`Config`](crate::Config), the operator layer and [`Scaling`](crate::Scaling)
+/// can be written in: `f32` or `f64` (sealed).
+///
+/// Built on [`num_traits::float::FloatCore`], which needs neither `std` nor `libm`. Firmware on a
+/// single-precision FPU (Cortex-M4F) writes its configuration in `f32` so that it links no `f64`
+/// arithmetic; the `f64` path is the exact reference.
+pub trait Real:
+    FloatCore + Default + fmt::Debug + fmt::Display + Send + Sync + 'static + sealed::Sealed
+{
+    /// A small integer, exactly.
+    fn from_u16(n: u16) -> Self;
+    /// The value as `f32`: nearest, a finite value beyond `f32`'s range saturates at `±f32::MAX`,
+    /// NaN and infinities stay what they are.
+    fn to_f32_nearest(self) -> f32;
+    /// The value as `f64` (exact).
+    fn to_f64_exact(self) -> f64;
+    /// The nearest value to an `f32` (exact).
+    fn from_f32_exact(v: f32) -> Self;
+    /// The nearest value to an `f64`, saturating like [`to_f32_nearest`](Real::to_f32_nearest).
+    fn from_f64_nearest(v: f64) -> Self;
+}
+
+impl Real for f32 {
+    #[inline(always)]
+    fn from_u16(n: u16) -> f32 {
+        f32::from(n)
+    }
+    #[inline(always)]
+    fn to_f32_nearest(self) -> f32 {
+        self
+    }
+    #[inline(always)]
+    fn to_f64_exact(self) -> f64 {
+        f64::from(self)
+    }
+    #[inline(always)]
+    fn from_f32_exact(v: f32) -> f32 {
+        v
+    }
+    fn from_f64_nearest(v: f64) -> f32 {
+        v.to_f32_nearest()
+    }
+}
+
+impl Real for f64 {
+    #[inline(always)]
+    fn from_u16(n: u16) -> f64 {
+        f64::from(n)
+    }
+    fn to_f32_nearest(self) -> f32 {
+        #[allow(
+            clippy::cast_possible_truncation,
+            reason = "range checked: finite values saturate"
+        )]
+        let narrow = self as f32;
+        if self.is_finite() && narrow.is_infinite() {
+            if self > 0.0 { f32::MAX } else { f32::MIN }
+        } else {
+            narrow
+        }
+    }
+    #[inline(always)]
+    fn to_f64_exact(self) -> f64 {
+        self
+    }
+    #[inline(always)]
+    fn from_f32_exact(v: f32) -> f64 {
+        f64::from(v)
+    }
+    #[inline(always)]
+    fn from_f64_nearest(v: f64) -> f64 {
+        v
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn narrowing_saturates_finite_values_and_keeps_faults() {
+        assert_eq!(1e39f64.to_f32_nearest(), f32::MAX);
+        assert_eq!((-1e300f64).to_f32_nearest(), f32::MIN);
+        assert_eq!(f64::INFINITY.to_f32_nearest(), f32::INFINITY);
+        assert!(f64::NAN.to_f32_nearest().is_nan());
+        assert_eq!(0.1f64.to_f32_nearest(), 0.1f32);
+        assert_eq!(<f32 as Real>::from_f64_nearest(-1e40), f32::MIN);
+    }
+}
