@@ -2,6 +2,8 @@
 
 use core::fmt;
 
+use heapless::HistoryBuf;
+
 use crate::voter::{Passage, Verdict};
 
 const PARITY: u8 = 1;
@@ -117,7 +119,8 @@ pub enum AlarmChange {
 /// Health of one reader over a sliding window of its last `W` passages, with lifetime totals
 /// and an alarm.
 ///
-/// Each passage costs O(1) whatever `W`; the window takes `W` bytes.
+/// Each passage costs O(1) whatever `W`; the window is a [`heapless::HistoryBuf`] of one byte per
+/// passage (`W` bytes and two words).
 ///
 /// ```
 /// use regler_trolley_id::{AlarmChange, AlarmLimits, encode, ReaderHealth, Strategy, TrolleyId, Voter};
@@ -138,8 +141,8 @@ pub enum AlarmChange {
 #[derive(Clone, Debug)]
 pub struct ReaderHealth<const W: usize> {
     limits: AlarmLimits,
-    ring: [u8; W],
-    next: usize,
+    /// The symptom flags of the last `W` passages.
+    ring: HistoryBuf<u8, W>,
     window: HealthStats,
     totals: HealthStats,
     alarm: bool,
@@ -153,8 +156,7 @@ impl<const W: usize> ReaderHealth<W> {
         const { assert!(W > 0, "a reader health window holds at least one passage") };
         ReaderHealth {
             limits,
-            ring: [0; W],
-            next: 0,
+            ring: HistoryBuf::new(),
             window: HealthStats::ZERO,
             totals: HealthStats::ZERO,
             alarm: false,
@@ -177,17 +179,13 @@ impl<const W: usize> ReaderHealth<W> {
         if passage.faulty_words > 0 {
             flags |= FAULTY;
         }
-        let full = usize::try_from(self.window.passages).map_or(true, |n| n >= W);
-        if let Some(slot) = self.ring.get_mut(self.next) {
-            if full {
-                self.window.remove(*slot);
+        // The passage that falls out of the window leaves the window's counts.
+        if self.ring.is_full() {
+            if let Some(&oldest) = self.ring.oldest() {
+                self.window.remove(oldest);
             }
-            *slot = flags;
         }
-        self.next = match self.next.checked_add(1) {
-            Some(n) if n < W => n,
-            _ => 0,
-        };
+        self.ring.write(flags);
         self.window.add(flags);
         self.totals.add(flags);
         self.update_alarm()

@@ -20,8 +20,11 @@ pub enum Strategy {
         k: u8,
     },
     /// Each of the 13 cam bits is decided by a strict majority of the readings that saw cams;
-    /// the majority word is then decoded. A tie on any bit, fewer than `min_samples` readings,
-    /// or a majority word that fails [`decode`] is a no-read.
+    /// the majority word is then decoded. The verdict names that trolley only if the readings
+    /// themselves support it: at least one reading decoded to it, and no other trolley was
+    /// decoded by more readings. A tie on any bit, fewer than `min_samples` readings, a majority
+    /// word that fails [`decode`], or a trolley no reading showed (three valid but different
+    /// reads of 51, 15 and 60 have the bitwise majority 63) is a no-read.
     Majority {
         /// Readings with cams needed before a verdict, at least 1.
         min_samples: u8,
@@ -92,6 +95,15 @@ pub enum NoRead {
     },
     /// The majority word itself does not decode.
     Undecodable(ReadError),
+    /// The majority word decodes to a trolley that the readings do not support: no reading
+    /// decoded to it, or another trolley was decoded by more readings.
+    Unsupported {
+        /// What the majority word decodes to.
+        majority: TrolleyId,
+    },
+    /// More readings than the voter counts (65 535) in one passage: a trolley stuck at the
+    /// reader or a reader that never sees the passage end. Nothing is decided on it.
+    TooManySamples,
 }
 
 impl fmt::Display for NoRead {
@@ -107,6 +119,15 @@ impl fmt::Display for NoRead {
             }
             NoRead::AmbiguousBit { bit } => write!(f, "cam {bit} tied between set and clear"),
             NoRead::Undecodable(e) => write!(f, "majority word does not decode: {e}"),
+            NoRead::Unsupported { majority } => {
+                write!(
+                    f,
+                    "majority word names {majority}, which the readings do not support"
+                )
+            }
+            NoRead::TooManySamples => {
+                f.write_str("more than 65535 readings in one passage: reader or trolley stuck")
+            }
         }
     }
 }
@@ -143,7 +164,8 @@ impl Verdict {
 pub struct Passage {
     /// The verdict.
     pub verdict: Verdict,
-    /// Readings taken (saturating at `u16::MAX`).
+    /// Readings taken, at most `u16::MAX`; a passage with more is a
+    /// [`NoRead::TooManySamples`].
     pub samples: u16,
     /// Readings that saw no cam.
     pub no_cams: u16,
@@ -162,6 +184,10 @@ pub struct Passage {
 /// call [`finish`](Voter::finish), which returns the [`Passage`] and makes the voter ready for the
 /// next trolley. The voter keeps counts, not readings: its size does not depend on the number of
 /// readings, and each reading costs a few instructions.
+///
+/// Whatever the strategy, [`Verdict::Identified`] names only a trolley that some reading of the
+/// passage decoded to, and a passage of more than 65 535 readings is a no-read
+/// ([`NoRead::TooManySamples`]) rather than a verdict on counters that stopped counting.
 ///
 /// ```
 /// use regler_trolley_id::{encode, Strategy, TrolleyId, Verdict, Voter, NoRead};
@@ -199,7 +225,18 @@ pub struct Voter {
     // Majority: how many readings with cams had each bit set
     with_cams: u16,
     ones: [u16; 13],
+    // Majority: the distinct trolleys decoded so far and how many readings decoded to each
+    decoded: [Option<(TrolleyId, u16)>; TRACKED],
+    // More distinct trolleys than `decoded` holds: support can no longer be proven
+    untracked: bool,
+    // A reading arrived after `samples` reached u16::MAX
+    overflowed: bool,
 }
+
+/// Distinct trolley numbers a [`Voter`] keeps counts of within one passage. A passage in which
+/// more distinct numbers decode than this is far too noisy to identify anything unless the
+/// majority trolley is among the first ones seen.
+const TRACKED: usize = 8;
 
 impl Voter {
     /// A voter using `strategy`, or an error if the strategy cannot work.
@@ -229,7 +266,13 @@ impl Voter {
 
     /// Takes one reading of the cams (a raw word as from the reader, any 16 bits).
     pub fn sample(&mut self, raw: u16) {
-        self.samples = self.samples.saturating_add(1);
+        let Some(samples) = self.samples.checked_add(1) else {
+            // Every counter below is at most `samples`, so none has saturated yet; from here
+            // on nothing is counted and the verdict is a no-read.
+            self.overflowed = true;
+            return;
+        };
+        self.samples = samples;
         let decoded = decode(raw);
         match decoded {
             Ok(id) => match self.first_decoded {
@@ -248,6 +291,9 @@ impl Voter {
         match self.strategy {
             Strategy::Consecutive { k } => self.sample_consecutive(decoded.ok(), k),
             Strategy::Majority { .. } => {
+                if let Ok(id) = decoded {
+                    self.support(id);
+                }
                 // Empty scans (trolley edges) and faulty words carry no vote.
                 if raw != 0 && raw & !CODE_MASK == 0 {
                     self.with_cams = self.with_cams.saturating_add(1);
@@ -259,6 +305,34 @@ impl Voter {
                 }
             }
         }
+    }
+
+    /// Counts one more reading that decoded to `id`.
+    fn support(&mut self, id: TrolleyId) {
+        for slot in &mut self.decoded {
+            match slot {
+                Some((seen, count)) if *seen == id => {
+                    // At most `samples`, which has not overflowed.
+                    *count = count.saturating_add(1);
+                    return;
+                }
+                Some(_) => {}
+                None => {
+                    *slot = Some((id, 1));
+                    return;
+                }
+            }
+        }
+        self.untracked = true;
+    }
+
+    /// How many readings decoded to `id`, if the voter tracked it.
+    fn support_of(&self, id: TrolleyId) -> Option<u16> {
+        self.decoded
+            .iter()
+            .flatten()
+            .find(|(seen, _)| *seen == id)
+            .map(|&(_, count)| count)
     }
 
     fn sample_consecutive(&mut self, decoded: Option<TrolleyId>, k: u8) {
@@ -287,6 +361,9 @@ impl Voter {
     /// The verdict on the readings so far, without ending the passage.
     #[must_use]
     pub fn verdict(&self) -> Verdict {
+        if self.overflowed {
+            return Verdict::NoRead(NoRead::TooManySamples);
+        }
         match self.strategy {
             Strategy::Consecutive { .. } => match (self.confirmed, self.conflict) {
                 (Some(first), Some(second)) => Verdict::NoRead(NoRead::Conflict { first, second }),
@@ -318,9 +395,24 @@ impl Voter {
                 word |= 1 << bit;
             }
         }
-        match decode(word) {
-            Ok(id) => Verdict::Identified(id),
-            Err(e) => Verdict::NoRead(NoRead::Undecodable(e)),
+        let majority = match decode(word) {
+            Ok(id) => id,
+            Err(e) => return Verdict::NoRead(NoRead::Undecodable(e)),
+        };
+        // The bitwise majority of different valid reads can be a trolley none of them showed:
+        // only a trolley that readings decoded to, and no other more often, is identified.
+        let supported = self.support_of(majority).is_some_and(|count| {
+            !self.untracked
+                && self
+                    .decoded
+                    .iter()
+                    .flatten()
+                    .all(|&(other, n)| other == majority || n <= count)
+        });
+        if supported {
+            Verdict::Identified(majority)
+        } else {
+            Verdict::NoRead(NoRead::Unsupported { majority })
         }
     }
 
@@ -356,6 +448,9 @@ impl Voter {
             conflict: None,
             with_cams: 0,
             ones: [0; 13],
+            decoded: [None; TRACKED],
+            untracked: false,
+            overflowed: false,
         }
     }
 
@@ -470,13 +565,53 @@ mod tests {
     }
 
     #[test]
-    fn counts_saturate_instead_of_wrapping() {
-        let mut v = Voter::new(Strategy::Consecutive { k: 255 }).unwrap();
-        let a = encode(id(9));
-        for _ in 0..70_000 {
-            v.sample(a);
+    fn a_passage_too_long_to_count_is_a_no_read() {
+        for strategy in [
+            Strategy::Consecutive { k: 255 },
+            Strategy::Majority { min_samples: 1 },
+        ] {
+            let mut v = Voter::new(strategy).unwrap();
+            // Counters that saturated used to let 65536 reads of 12 outvote 65535 reads of 3
+            // as a trolley 15 that no reading showed.
+            for _ in 0..65_535 {
+                v.sample(encode(id(3)));
+            }
+            assert_eq!(v.verdict(), Verdict::Identified(id(3)), "{strategy:?}");
+            for _ in 0..65_536 {
+                v.sample(encode(id(12)));
+            }
+            assert_eq!(v.samples(), u16::MAX);
+            let p = v.finish();
+            assert_eq!(
+                p.verdict,
+                Verdict::NoRead(NoRead::TooManySamples),
+                "{strategy:?}"
+            );
+            assert_eq!(
+                v.vote(&[encode(id(3)); 300]).verdict,
+                Verdict::Identified(id(3))
+            );
         }
-        assert_eq!(v.samples(), u16::MAX);
-        assert_eq!(v.finish().verdict, Verdict::Identified(id(9)));
+    }
+
+    #[test]
+    fn majority_names_only_a_trolley_the_readings_showed() {
+        let mut v = Voter::new(Strategy::Majority { min_samples: 3 }).unwrap();
+        let reads = [51, 15, 60].map(|n| encode(id(n)));
+        assert_eq!(
+            decode(
+                encode(id(51)) & encode(id(15))
+                    | encode(id(51)) & encode(id(60))
+                    | encode(id(15)) & encode(id(60))
+            ),
+            Ok(id(63))
+        );
+        assert_eq!(
+            v.vote(&reads).verdict,
+            Verdict::NoRead(NoRead::Unsupported { majority: id(63) })
+        );
+        // A majority that readings support is named: 51 twice, 63 once.
+        let (a, b) = (encode(id(51)), encode(id(63)));
+        assert_eq!(v.vote(&[a, b, a]).verdict, Verdict::Identified(id(51)));
     }
 }
