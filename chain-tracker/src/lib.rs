@@ -18,6 +18,6 @@ mod tracker;
 pub use stretch::{Measurement, StretchConfig, StretchConfigError, StretchMeter};
 pub use table::{CorrectionError, DistanceTable, TableError, correct};
 pub use tracker::{
-    EnterError, HeldTipper, InFlight, SOURCE_HOLD_PULSES, Snapshot, TipperEvent, Tracker,
-    TrackerError,
+    EnterError, HeldTipper, InFlight, RESTORE_SLACK, SOURCE_HOLD_PULSES, Snapshot, TipperEvent,
+    Tracker, TrackerError,
 };

@@ -87,7 +87,43 @@ pub enum TrackerError {
     },
     /// A snapshot holds a trolley with 0 pulses to go (it would have arrived already).
     ZeroRemaining,
+    /// A snapshot holds a tipper set for longer than this tracker's hold (a snapshot from a
+    /// firmware with another hold, or a corrupt block).
+    HeldTooLong {
+        /// The tipper.
+        tipper: usize,
+        /// Pulses the snapshot says it stays set.
+        remaining: u32,
+        /// This tracker's hold.
+        hold: u32,
+    },
+    /// A snapshot names the same tipper as set twice.
+    DuplicateHeld {
+        /// The tipper.
+        tipper: usize,
+    },
+    /// A snapshot holds a trolley further from its tipper than the tipper is from the reader
+    /// (plus [`RESTORE_SLACK`] pulses of rescaling rounding).
+    TooFar {
+        /// Its tipper.
+        tipper: usize,
+        /// Pulses the snapshot says it has to go.
+        remaining: u32,
+        /// The tipper's distance at the snapshot's DIA.
+        distance: u32,
+    },
+    /// A snapshot lists a tipper's trolleys out of order: one would overtake the one that
+    /// entered before it, which a chain cannot do.
+    OutOfOrder {
+        /// The tipper.
+        tipper: usize,
+    },
 }
+
+/// Pulses by which a trolley's remaining distance may exceed its tipper's distance in a
+/// snapshot: each recalibration rounds a rescaled distance to the nearest pulse, and keeps a
+/// trolley from overtaking the one before it.
+pub const RESTORE_SLACK: u32 = 2;
 
 impl fmt::Display for TrackerError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -106,6 +142,29 @@ impl fmt::Display for TrackerError {
             TrackerError::ZeroRemaining => {
                 f.write_str("snapshot holds a trolley with 0 pulses to go")
             }
+            TrackerError::HeldTooLong {
+                tipper,
+                remaining,
+                hold,
+            } => write!(
+                f,
+                "snapshot holds tipper {tipper} set for {remaining} more pulses, but the hold is {hold}"
+            ),
+            TrackerError::DuplicateHeld { tipper } => {
+                write!(f, "snapshot names tipper {tipper} as set twice")
+            }
+            TrackerError::TooFar {
+                tipper,
+                remaining,
+                distance,
+            } => write!(
+                f,
+                "snapshot holds a trolley {remaining} pulses from tipper {tipper}, which is only {distance} from the reader"
+            ),
+            TrackerError::OutOfOrder { tipper } => write!(
+                f,
+                "snapshot lists the trolleys for tipper {tipper} out of order (one would overtake another)"
+            ),
         }
     }
 }
@@ -593,23 +652,58 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
     }
 
     /// Replaces the state with `snapshot` (taken from a tracker with the same configuration).
-    /// The snapshot is checked first; on an error nothing changes.
+    /// Every field is checked against this tracker first, so a snapshot from a firmware with
+    /// another configuration or a corrupt block is an error, never a tracker that misbehaves:
+    /// the DIA must give a valid table; every tipper must exist; a set tipper must reset within
+    /// this tracker's hold and be listed once; a trolley must have 1..=distance +
+    /// [`RESTORE_SLACK`] pulses to go, and a tipper's trolleys must be in the order they can
+    /// arrive. On an error nothing changes.
     pub fn restore(&mut self, snapshot: &Snapshot<K, N, T>) -> Result<(), TrackerError> {
+        let da = self.table.corrected(snapshot.dia)?;
         let tippers = self.table.tippers();
+        let mut last = [0u32; T];
         for t in &snapshot.in_flight {
+            let (Some(&distance), Some(previous)) = (da.get(t.tipper), last.get_mut(t.tipper))
+            else {
+                return Err(TrackerError::UnknownTipper { tipper: t.tipper });
+            };
             if t.tipper >= tippers {
                 return Err(TrackerError::UnknownTipper { tipper: t.tipper });
             }
             if t.remaining == 0 {
                 return Err(TrackerError::ZeroRemaining);
             }
-        }
-        for h in &snapshot.held {
-            if h.tipper >= tippers {
-                return Err(TrackerError::UnknownTipper { tipper: h.tipper });
+            let distance = distance.max(1);
+            if t.remaining > distance.saturating_add(RESTORE_SLACK) {
+                return Err(TrackerError::TooFar {
+                    tipper: t.tipper,
+                    remaining: t.remaining,
+                    distance,
+                });
             }
+            if t.remaining < *previous {
+                return Err(TrackerError::OutOfOrder { tipper: t.tipper });
+            }
+            *previous = t.remaining;
+        }
+        let mut held = [false; T];
+        for h in &snapshot.held {
+            let Some(seen) = held.get_mut(h.tipper).filter(|_| h.tipper < tippers) else {
+                return Err(TrackerError::UnknownTipper { tipper: h.tipper });
+            };
+            if *seen {
+                return Err(TrackerError::DuplicateHeld { tipper: h.tipper });
+            }
+            *seen = true;
             if h.remaining == 0 {
                 return Err(TrackerError::ZeroRemaining);
+            }
+            if h.remaining > self.hold {
+                return Err(TrackerError::HeldTooLong {
+                    tipper: h.tipper,
+                    remaining: h.remaining,
+                    hold: self.hold,
+                });
             }
         }
         let da = self.table.corrected(snapshot.dia)?;
@@ -935,7 +1029,65 @@ mod tests {
             t.restore(&bad),
             Err(TrackerError::Table(TableError::ZeroMeasurement))
         );
-        assert_eq!(t.snapshot(), good);
+        let mut bad = good.clone();
+        bad.in_flight[0].remaining = 13; // tipper 0 is 10 pulses from the reader
+        assert_eq!(
+            t.restore(&bad),
+            Err(TrackerError::TooFar {
+                tipper: 0,
+                remaining: 13,
+                distance: 10
+            })
+        );
+        let mut bad = good.clone();
+        bad.in_flight
+            .push(InFlight {
+                trolley: 8,
+                tipper: 0,
+                remaining: 1,
+            })
+            .unwrap();
+        assert_eq!(t.restore(&bad), Err(TrackerError::OutOfOrder { tipper: 0 }));
+        assert_eq!(t.snapshot(), good, "refused snapshots changed nothing");
+    }
+
+    #[test]
+    fn a_held_tipper_beyond_the_hold_is_refused() {
+        // A snapshot from a firmware whose hold was 20: restored into a hold of 6, the tipper
+        // reset would come 14 pulses late, and every later reset of it never.
+        let mut t = tracker::<4>(&[10], 6);
+        let mut snapshot = t.snapshot();
+        snapshot
+            .held
+            .push(HeldTipper {
+                tipper: 0,
+                remaining: 20,
+            })
+            .unwrap();
+        assert_eq!(
+            t.restore(&snapshot),
+            Err(TrackerError::HeldTooLong {
+                tipper: 0,
+                remaining: 20,
+                hold: 6
+            })
+        );
+        snapshot.held[0].remaining = 6;
+        snapshot
+            .held
+            .push(HeldTipper {
+                tipper: 0,
+                remaining: 2,
+            })
+            .unwrap();
+        assert_eq!(
+            t.restore(&snapshot),
+            Err(TrackerError::DuplicateHeld { tipper: 0 })
+        );
+        snapshot.held.pop();
+        t.restore(&snapshot).unwrap();
+        let events = run(&mut t, 7);
+        assert_eq!(events, [(6, TipperEvent::Reset { tipper: 0 })]);
     }
 
     #[test]

@@ -10,7 +10,9 @@
 
 use proptest::prelude::{any, prop, prop_assert, prop_assert_eq, prop_oneof, proptest};
 use proptest::strategy::Strategy;
-use regler_chain_tracker::{DistanceTable, EnterError, InFlight, TipperEvent, Tracker, correct};
+use regler_chain_tracker::{
+    DistanceTable, EnterError, HeldTipper, InFlight, Snapshot, TipperEvent, Tracker, correct,
+};
 
 const N: usize = 12;
 const T: usize = 4;
@@ -193,5 +195,62 @@ proptest! {
         let before = tracker.snapshot();
         prop_assert!(tracker.recalibrate(dia).is_err());
         prop_assert_eq!(tracker.snapshot(), before);
+    }
+}
+
+proptest! {
+    /// Any stored snapshot — corrupt, or from a firmware with another configuration — is refused
+    /// (changing nothing) or gives a tracker that keeps its promises: no tipper stays set longer
+    /// than the hold after its last arrival, and every trolley arrives. (The fuzz target
+    /// `restore` tries the same over arbitrary bytes.)
+    #[test]
+    fn any_snapshot_is_refused_or_safe(
+        now in any::<u32>(),
+        dia in prop_oneof![990u32..1010, any::<u32>()],
+        in_flight in prop::collection::vec((0usize..6, 0u32..400), 0..=N),
+        held in prop::collection::vec((0usize..6, 0u32..10), 0..=T),
+        pulses in 0u32..500,
+    ) {
+        let table = DistanceTable::<T>::new(SIA, &[5, 40, 120, 250]).unwrap();
+        let mut tracker = Tracker::<u16, N, T>::new(table, HOLD).unwrap();
+        let mut snapshot: Snapshot<u16, N, T> = Snapshot { now, dia, in_flight: heapless::Vec::new(), held: heapless::Vec::new() };
+        for (k, (tipper, remaining)) in in_flight.into_iter().enumerate() {
+            snapshot.in_flight.push(InFlight { trolley: k as u16, tipper, remaining }).unwrap();
+        }
+        for (tipper, remaining) in held {
+            snapshot.held.push(HeldTipper { tipper, remaining }).unwrap();
+        }
+        let before = tracker.snapshot();
+        if tracker.restore(&snapshot).is_err() {
+            prop_assert_eq!(tracker.snapshot(), before);
+            return Ok(());
+        }
+        let mut since = [None::<u32>; T];
+        for h in &snapshot.held {
+            since[h.tipper] = Some(HOLD - h.remaining);
+        }
+        // Distances at an absurd DIA can be 10^9 pulses: pulse on long enough to see every
+        // restored trolley arrive and every hold end, but not for ever.
+        let farthest = tracker.table().distances().iter().copied().max().unwrap().min(2000);
+        for _ in 0..farthest + HOLD + 3 + pulses {
+            let mut arrived = Vec::new();
+            tracker.pulse(|e| if let TipperEvent::Set { tipper, .. } = e { arrived.push(tipper) });
+            for s in since.iter_mut().flatten() {
+                *s += 1;
+            }
+            for tipper in arrived {
+                since[tipper] = Some(0);
+            }
+            for (tipper, since) in since.iter().enumerate() {
+                if tracker.is_set(tipper) {
+                    let s = since.unwrap_or(u32::MAX);
+                    prop_assert!(s < HOLD, "tipper {} set {} pulses after its last arrival", tipper, s);
+                }
+            }
+        }
+        if farthest < 2000 {
+            prop_assert!(tracker.is_empty());
+            prop_assert!((0..T).all(|t| !tracker.is_set(t)));
+        }
     }
 }
