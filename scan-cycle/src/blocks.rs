@@ -2,7 +2,16 @@
 //!
 //! Time is a wrapping `u32` millisecond count passed in by the caller. The timers accumulate the
 //! time between calls (wrapping difference), so they work across the wrap of the counter as long
-//! as two calls are less than 2³² ms (49.7 days) apart; elapsed time saturates at `u32::MAX`.
+//! as two calls are less than 2³¹ ms (24.8 days) apart; elapsed time saturates at `u32::MAX`. A
+//! clock that steps back (a wrapping difference of 2³¹ or more) adds no time: the timers wait
+//! until it has caught up with the latest time they saw, instead of taking the step for 49 days
+//! and firing.
+//!
+//! A timer that has finished stays finished until its input says otherwise, whatever happens to
+//! PT meanwhile: a TON that is on stays on while IN stays on; a TOF that has gone off stays off
+//! while IN stays off; a TP whose pulse has ended gives no new pulse without a new rising edge.
+//! A PT change while a timer is timing takes effect at the next call. This is the behaviour of
+//! the standard's ST bodies as matiec and CODESYS implement them.
 
 /// Accumulated time since a timer started, robust to the wrap of the clock.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -22,10 +31,13 @@ impl Elapsed {
     }
 
     fn advance(&mut self, now_ms: u32) -> u32 {
-        self.total_ms = self
-            .total_ms
-            .saturating_add(now_ms.wrapping_sub(self.last_ms));
-        self.last_ms = now_ms;
+        let step = now_ms.wrapping_sub(self.last_ms);
+        // A step of 2^31 ms or more is the clock going back: no time passes, and the latest
+        // time seen stays the reference.
+        if step < 1 << 31 {
+            self.total_ms = self.total_ms.saturating_add(step);
+            self.last_ms = now_ms;
+        }
         self.total_ms
     }
 }
@@ -49,6 +61,8 @@ pub struct Ton {
     pt_ms: u32,
     running: Option<Elapsed>,
     q: bool,
+    /// ET once the timer has finished; a finished timer stays finished until IN goes off.
+    done_et: Option<u32>,
 }
 
 impl Ton {
@@ -59,6 +73,7 @@ impl Ton {
             pt_ms,
             running: None,
             q: false,
+            done_et: None,
         }
     }
 
@@ -67,11 +82,17 @@ impl Ton {
         if !input {
             self.running = None;
             self.q = false;
+            self.done_et = None;
             return false;
         }
+        if self.done_et.is_some() {
+            return true;
+        }
         let running = self.running.get_or_insert(Elapsed::start(now_ms));
-        let elapsed = running.advance(now_ms);
-        self.q = elapsed >= self.pt_ms;
+        if running.advance(now_ms) >= self.pt_ms {
+            self.q = true;
+            self.done_et = Some(self.pt_ms);
+        }
         self.q
     }
 }
@@ -94,6 +115,8 @@ pub struct Tof {
     pt_ms: u32,
     running: Option<Elapsed>,
     q: bool,
+    /// ET once the off-delay has run out; it stays out until IN comes on.
+    done_et: Option<u32>,
 }
 
 impl Tof {
@@ -104,6 +127,7 @@ impl Tof {
             pt_ms,
             running: None,
             q: false,
+            done_et: None,
         }
     }
 
@@ -111,12 +135,16 @@ impl Tof {
     pub fn call(&mut self, input: bool, now_ms: u32) -> bool {
         if input {
             self.running = None;
+            self.done_et = None;
             self.q = true;
             return true;
         }
-        if self.q || self.running.is_some() {
+        if self.q {
             let running = self.running.get_or_insert(Elapsed::start(now_ms));
-            self.q = running.advance(now_ms) < self.pt_ms;
+            if running.advance(now_ms) >= self.pt_ms {
+                self.q = false;
+                self.done_et = Some(self.pt_ms);
+            }
         }
         self.q
     }
@@ -141,6 +169,8 @@ pub struct Tp {
     running: Option<Elapsed>,
     q: bool,
     prev_in: bool,
+    /// ET once the pulse has ended with IN still on; no new pulse without a new rising edge.
+    done_et: Option<u32>,
 }
 
 impl Tp {
@@ -152,6 +182,7 @@ impl Tp {
             running: None,
             q: false,
             prev_in: false,
+            done_et: None,
         }
     }
 
@@ -159,17 +190,22 @@ impl Tp {
     pub fn call(&mut self, input: bool, now_ms: u32) -> bool {
         let rising = input && !self.prev_in;
         self.prev_in = input;
-        if rising && !self.q && self.running.is_none_or(|r| r.total_ms >= self.pt_ms) {
+        if rising && !self.q {
             self.running = Some(Elapsed::start(now_ms));
+            self.done_et = None;
         }
         if let Some(running) = &mut self.running {
-            let elapsed = running.advance(now_ms);
-            self.q = elapsed < self.pt_ms;
-            if !self.q && !input {
+            if running.advance(now_ms) >= self.pt_ms {
+                // The pulse is over: ET holds while IN stays on, and a longer PT set now
+                // starts nothing.
+                self.q = false;
                 self.running = None;
+                self.done_et = input.then_some(self.pt_ms);
+            } else {
+                self.q = true;
             }
-        } else {
-            self.q = false;
+        } else if !input {
+            self.done_et = None;
         }
         self.q
     }
@@ -182,7 +218,10 @@ macro_rules! timer_accessors {
             #[doc = $et_doc]
             #[must_use]
             pub fn et(&self) -> u32 {
-                self.running.map_or(0, |r| r.total_ms.min(self.pt_ms))
+                match self.done_et {
+                    Some(et) => et,
+                    None => self.running.map_or(0, |r| r.total_ms.min(self.pt_ms)),
+                }
             }
 
             /// Q as of the last call.
@@ -197,8 +236,9 @@ macro_rules! timer_accessors {
                 self.pt_ms
             }
 
-            /// Changes PT; takes effect at the next call (a running timer compares the time it
-            /// has really run with the new PT).
+            /// Changes PT; takes effect at the next call if the timer is timing (it compares the
+            /// time it has really run with the new PT). A finished timer stays finished until
+            /// its input changes.
             pub fn set_pt(&mut self, pt_ms: u32) {
                 self.pt_ms = pt_ms;
             }
@@ -529,10 +569,62 @@ mod tests {
         t.set_pt(50); // already past the new PT
         assert!(t.call(true, 61));
         assert_eq!(t.et(), 50);
-        t.set_pt(200); // longer again: counts on from the real elapsed time
-        assert!(!t.call(true, 150));
-        assert_eq!(t.et(), 150);
+        t.set_pt(200); // finished: stays finished while IN stays on (matiec's STATE 2)
+        assert!(t.call(true, 150));
+        assert_eq!(t.et(), 50);
+        assert!(!t.call(false, 160));
+        // While timing, a PT change takes effect: counts on from the real elapsed time.
+        t.call(true, 1000);
+        t.set_pt(100);
+        assert!(!t.call(true, 1099));
+        t.set_pt(300);
+        assert!(!t.call(true, 1200));
+        assert_eq!(t.et(), 200);
+        assert!(t.call(true, 1300));
+    }
+
+    #[test]
+    fn tof_stays_off_after_expiry_when_pt_rises() {
+        let mut t = Tof::new(100);
+        assert!(t.call(true, 0));
+        assert!(t.call(false, 10));
+        assert!(!t.call(false, 110));
+        t.set_pt(1000);
+        assert!(!t.call(false, 120), "an expired TOF must not come back on");
+        assert_eq!(t.et(), 100);
+        // While timing a change takes effect.
         assert!(t.call(true, 200));
+        assert!(t.call(false, 300));
+        t.set_pt(50);
+        assert!(!t.call(false, 350));
+    }
+
+    #[test]
+    fn tp_gives_no_pulse_without_an_edge_when_pt_rises() {
+        let mut t = Tp::new(100);
+        assert!(t.call(true, 0));
+        assert!(!t.call(true, 100));
+        t.set_pt(500);
+        assert!(!t.call(true, 150), "no rising edge, no pulse");
+        assert_eq!(t.et(), 100);
+        assert!(!t.call(false, 160));
+        assert_eq!(t.et(), 0);
+        assert!(t.call(true, 200), "a new edge: a pulse of the new PT");
+        assert!(t.call(false, 650));
+        assert!(!t.call(false, 700));
+    }
+
+    #[test]
+    fn a_clock_that_steps_back_fires_nothing() {
+        let mut t = Ton::new(500);
+        t.call(true, 10_000);
+        assert!(!t.call(true, 9_999), "1 ms back is not 49 days forward");
+        assert!(!t.call(true, 10_400));
+        assert!(t.call(true, 10_500));
+        let mut p = Tp::new(500);
+        assert!(p.call(true, 10_000));
+        assert!(p.call(true, 9_000));
+        assert!(!p.call(true, 10_500));
     }
 
     #[test]

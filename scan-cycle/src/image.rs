@@ -232,9 +232,10 @@ impl<const W: usize> Forcing<W> {
 /// the memory is cleared.
 ///
 /// **Debounce.** A debounced input with count k changes its conditioned value only after k
-/// consecutive readings that differ from it (1 = no debounce; at most 15). The counters are
-/// bit-sliced, four bit planes per word, so a cycle costs a few dozen word operations per 16
-/// inputs, whatever the counts.
+/// consecutive readings that differ from it (1 = no debounce; at most 15). A count changed while
+/// an input is counting applies to the readings already counted: lowered below them, the next
+/// differing reading changes the value. The counters are bit-sliced, four bit planes per word,
+/// so a cycle costs a few dozen word operations per 16 inputs, whatever the counts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -368,7 +369,12 @@ impl<const W: usize> Conditioning<W> {
             *c1 &= diff;
             *c2 &= diff;
             *c3 &= diff;
-            let reached = diff & !((*c0 ^ k0) | (*c1 ^ k1) | (*c2 ^ k2) | (*c3 ^ k3));
+            // Counter >= count, bit-sliced from the top bit down. ">=" rather than "==": a count
+            // lowered below a running counter must end the wait, not let the counter wrap.
+            let (e3, e2, e1) = (!(*c3 ^ k3), !(*c2 ^ k2), !(*c1 ^ k1));
+            let above = (*c3 & !k3) | e3 & ((*c2 & !k2) | e2 & ((*c1 & !k1) | e1 & (*c0 & !k0)));
+            let equal = e3 & e2 & e1 & !(*c0 ^ k0);
+            let reached = diff & (above | equal);
             *stable ^= reached;
             *c0 &= !reached;
             *c1 &= !reached;
@@ -396,6 +402,23 @@ mod tests {
         f.unforce(3).unwrap();
         assert_eq!(f.forced(3), None);
         assert!(f.force(32, true).is_err());
+    }
+
+    #[test]
+    fn lowering_a_count_mid_count_ends_the_wait() {
+        let mut c: Conditioning<1> = Conditioning::new();
+        c.set_debounce(0, 15).unwrap();
+        let mut out = Image::new();
+        for _ in 0..10 {
+            c.condition(&[1], &mut out);
+        }
+        assert!(!out.get(0));
+        c.set_debounce(0, 3).unwrap();
+        c.condition(&[1], &mut out);
+        assert!(
+            out.get(0),
+            "11 readings counted, 3 needed: no wrap through 15"
+        );
     }
 
     #[test]

@@ -9,7 +9,7 @@
 
 use proptest::prelude::{any, prop, prop_assert_eq, prop_oneof, proptest};
 use proptest::strategy::Strategy;
-use regler_scan_cycle::{Ctu, TimerId, TimerQueue, Tof, Ton};
+use regler_scan_cycle::{Ctu, TimerId, TimerQueue, Tof, Ton, Tp};
 
 #[derive(Clone, Debug)]
 enum Op {
@@ -128,6 +128,62 @@ proptest! {
         }
     }
 
+    /// TON, TOF and TP against state machines written from the standard's ST bodies (as matiec
+    /// has them), with PT changed at random moments: while timing a change counts, a finished
+    /// timer stays finished until its input changes.
+    #[test]
+    fn timers_with_pt_changes_match_state_machines(
+        pt0 in 0u32..300,
+        steps in prop::collection::vec((any::<bool>(), 0u32..120, prop::option::weighted(0.2, 0u32..300)), 1..120),
+        start in any::<u32>(),
+    ) {
+        #[derive(Clone, Copy, PartialEq, Debug)]
+        enum State { Idle, Timing(u64), Done }
+        let (mut ton, mut tof, mut tp) = (Ton::new(pt0), Tof::new(pt0), Tp::new(pt0));
+        let (mut s_on, mut s_off, mut s_p) = (State::Idle, State::Idle, State::Idle);
+        let (mut pt, mut now, mut t, mut prev_in) = (u64::from(pt0), start, 0u64, false);
+        for (input, dt, new_pt) in steps {
+            if let Some(p) = new_pt {
+                pt = u64::from(p);
+                ton.set_pt(p);
+                tof.set_pt(p);
+                tp.set_pt(p);
+            }
+            now = now.wrapping_add(dt);
+            t += u64::from(dt);
+            // TON: IN off resets; IN on times from the call it came on; done stays done.
+            s_on = match (input, s_on) {
+                (false, _) => State::Idle,
+                (true, State::Idle) => if pt == 0 { State::Done } else { State::Timing(t) },
+                (true, State::Timing(s)) if t - s >= pt => State::Done,
+                (true, other) => other,
+            };
+            // TOF: IN on sets Q; IN off times from the call it went off; expired stays off.
+            s_off = match (input, s_off) {
+                (true, _) => State::Done, // Done here means "on"
+                (false, State::Done) => if pt == 0 { State::Idle } else { State::Timing(t) },
+                (false, State::Timing(s)) if t - s >= pt => State::Idle,
+                (false, other) => other,
+            };
+            // TP: a rising edge outside a pulse starts one; an ended pulse waits for IN off.
+            let rising = input && !prev_in;
+            prev_in = input;
+            s_p = match s_p {
+                State::Idle | State::Done if rising => State::Timing(t),
+                State::Done if !input => State::Idle,
+                other => other,
+            };
+            if let State::Timing(s) = s_p {
+                if t - s >= pt {
+                    s_p = if input { State::Done } else { State::Idle };
+                }
+            }
+            prop_assert_eq!(ton.call(input, now), s_on == State::Done, "TON at {}", t);
+            prop_assert_eq!(tof.call(input, now), s_off != State::Idle, "TOF at {}", t);
+            prop_assert_eq!(tp.call(input, now), matches!(s_p, State::Timing(_)), "TP at {}", t);
+        }
+    }
+
     /// CTU counts rising edges.
     #[test]
     fn ctu_counts_rising_edges(inputs in prop::collection::vec((any::<bool>(), prop::bool::weighted(0.05)), 1..200), pv in 0i32..20) {
@@ -223,6 +279,74 @@ mod images {
                             let written = io.outputs[p / 16] >> (p % 16) & 1 == 1;
                             prop_assert_eq!(written, fout[p].unwrap_or(prog_bit));
                             prop_assert_eq!(plc.forced_outputs().forced(p), fout[p]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+mod debounce {
+    use proptest::prelude::{any, prop, prop_assert_eq, proptest};
+    use regler_scan_cycle::{Conditioning, Image};
+
+    /// One input as the documentation describes it, counted with a plain integer.
+    #[derive(Clone, Copy, Default)]
+    struct Input {
+        stable: bool,
+        count: u8,
+        k: u8,
+        latched: bool,
+        pending: bool,
+    }
+
+    proptest! {
+        /// The bit-sliced debounce and latch against a per-input counter model, with counts
+        /// changed mid-count and latched pulses captured between cycles.
+        #[test]
+        fn conditioning_matches_a_per_input_counter(
+            ks in prop::collection::vec(1u8..=15, 32),
+            latched in any::<u32>(),
+            ops in prop::collection::vec((0u8..10, any::<u32>(), 0usize..32, 1u8..=15), 1..300),
+        ) {
+            let mut c: Conditioning<2> = Conditioning::new();
+            let mut model = [Input::default(); 32];
+            for (p, m) in model.iter_mut().enumerate() {
+                m.k = ks[p];
+                m.latched = latched >> p & 1 == 1;
+                c.set_debounce(p, m.k).unwrap();
+                c.set_latched(p, m.latched).unwrap();
+            }
+            for (op, bits, point, k) in ops {
+                let raw = [bits as u16, (bits >> 16) as u16];
+                match op {
+                    0 => {
+                        c.set_debounce(point, k).unwrap();
+                        model[point].k = k;
+                    }
+                    1 => {
+                        c.capture(&raw);
+                        for (p, m) in model.iter_mut().enumerate() {
+                            m.pending |= m.latched && bits >> p & 1 == 1;
+                        }
+                    }
+                    _ => {
+                        let mut out: Image<2> = Image::new();
+                        c.condition(&raw, &mut out);
+                        for (p, m) in model.iter_mut().enumerate() {
+                            let reading = bits >> p & 1 == 1 || m.pending;
+                            m.pending = false;
+                            if reading == m.stable {
+                                m.count = 0;
+                            } else {
+                                m.count += 1;
+                                if m.count >= m.k {
+                                    m.stable = reading;
+                                    m.count = 0;
+                                }
+                            }
+                            prop_assert_eq!(out.get(p), m.stable, "point {}", p);
                         }
                     }
                 }
