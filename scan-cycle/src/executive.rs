@@ -86,17 +86,20 @@ impl fmt::Display for Halt {
 
 impl core::error::Error for Halt {}
 
-/// A breakpoint of the monitor: the run stops after the cycle in which it holds.
+/// A breakpoint of the monitor. It fires on a change: the run stops after the cycle in which it
+/// comes to hold, not again while it goes on holding, so continuing a run moves past it (to the
+/// next time it comes to hold).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum Breakpoint {
-    /// After cycle number n.
+    /// After cycle number n (once).
     Cycle(u64),
-    /// When an input point is on.
+    /// When an input point comes on.
     InputOn(usize),
-    /// When an output point is on.
+    /// When an output point comes on.
     OutputOn(usize),
-    /// When an output point is off.
+    /// When an output point goes off.
     OutputOff(usize),
 }
 
@@ -525,19 +528,24 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         &self.config
     }
 
-    /// Whether `breakpoint` holds after the last cycle.
+    /// Whether `breakpoint`'s condition holds after the last cycle (for `Cycle(n)`: n cycles
+    /// or more have run).
     #[must_use]
     pub fn reached(&self, breakpoint: Breakpoint) -> bool {
+        Self::holds(breakpoint, self.cycle, &self.inputs, &self.previous)
+    }
+
+    fn holds(breakpoint: Breakpoint, cycle: u64, inputs: &Image<IW>, outputs: &Image<OW>) -> bool {
         match breakpoint {
-            Breakpoint::Cycle(n) => self.cycle >= n,
-            Breakpoint::InputOn(p) => self.inputs.get(p),
-            Breakpoint::OutputOn(p) => self.previous.get(p),
-            Breakpoint::OutputOff(p) => self.previous.try_get(p) == Some(false),
+            Breakpoint::Cycle(n) => cycle >= n,
+            Breakpoint::InputOn(p) => inputs.get(p),
+            Breakpoint::OutputOn(p) => outputs.get(p),
+            Breakpoint::OutputOff(p) => outputs.try_get(p) == Some(false),
         }
     }
 
     /// The monitor's run command: up to `cycles` cycles (`u64::MAX`: continuous), stopping after
-    /// the first cycle at which one of `breakpoints` holds. `between` runs after every cycle (the
+    /// the first cycle in which one of `breakpoints` comes to hold (it did not before the cycle). `between` runs after every cycle (the
     /// reserve, the plant simulation). Returns the cycles run and why the run stopped early.
     pub fn run<I: Io<IW, OW>, P: FnMut(&mut Scan<'_, IW, OW>)>(
         &mut self,
@@ -565,12 +573,17 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
     ) -> (u64, Option<Halt>, bool) {
         let mut done = 0u64;
         while done < cycles {
+            // The images before the cycle, to see which breakpoints come to hold in it.
+            let (cycle, inputs, outputs) = (self.cycle, self.inputs, self.previous);
             if let Err(halt) = self.cycle(io, &mut program) {
                 return (done, Some(halt), false);
             }
             done = done.saturating_add(1);
             between(self, io);
-            if let Some(&b) = breakpoints.iter().find(|b| self.reached(**b)) {
+            let fired = breakpoints
+                .iter()
+                .find(|&&b| self.reached(b) && !Self::holds(b, cycle, &inputs, &outputs));
+            if let Some(&b) = fired {
                 return (done, Some(Halt::Breakpoint(b)), false);
             }
             if stop(self) {
@@ -856,6 +869,10 @@ mod tests {
         );
         let (n, why) = plc.run(&mut io, 3, &[], program, |_, _| {});
         assert_eq!((n, why), (3, None));
+        // A breakpoint passed is not hit again at once: the cycle breakpoint fires once, and
+        // `cont` runs on from an output breakpoint to its next rising edge.
+        let (n, why) = plc.run(&mut io, 5, &[Breakpoint::Cycle(4)], program, |_, _| {});
+        assert_eq!((n, why), (5, None));
         // A condition breakpoint: both outputs 0 and 2 on.
         let both = |s: &mut Scan<'_, 2, 1>| {
             s.outputs.set(0, s.cycle.is_multiple_of(2)).unwrap();
@@ -871,5 +888,24 @@ mod tests {
         );
         assert!(by_condition && why.is_none());
         assert!(plc.cycle_count().is_multiple_of(10));
+    }
+
+    #[test]
+    fn cont_moves_past_a_breakpoint_to_its_next_edge() {
+        let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(CycleConfig::source()));
+        // Output 2 is on in cycles 3, 4, 5 of every ten.
+        let program = |s: &mut Scan<'_, 2, 1>| {
+            s.outputs.set(2, (3..=5).contains(&(s.cycle % 10))).unwrap();
+        };
+        let on = [Breakpoint::OutputOn(2)];
+        let mut stops = Vec::new();
+        for _ in 0..3 {
+            plc.run(&mut io, 100, &on, program, |_, _| {});
+            stops.push(plc.cycle_count());
+        }
+        assert_eq!(stops, [3, 13, 23], "level-triggered would stop at 3, 4, 5");
+        let off = [Breakpoint::OutputOff(2)];
+        plc.run(&mut io, 100, &off, program, |_, _| {});
+        assert_eq!(plc.cycle_count(), 26);
     }
 }

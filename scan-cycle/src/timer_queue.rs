@@ -10,7 +10,10 @@ const LEVELS_U32: u32 = 6;
 const NIL: u32 = u32::MAX;
 
 /// A handle on an inserted timer. It stays valid until the timer expires or is removed; after
-/// that it is stale forever and can never touch a newer timer in the same place.
+/// that it is stale forever and can never touch a newer timer in the same place: each place
+/// counts its uses in a 32-bit generation, and a place whose generation is used up is retired
+/// rather than reused (after 2³² timers in one place — 49.7 days of a 1 kHz timer that is always
+/// re-armed in the same place — the queue has room for one timer fewer).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TimerId {
@@ -105,14 +108,18 @@ impl<A, const N: usize> Default for TimerQueue<A, N> {
 }
 
 impl<A, const N: usize> TimerQueue<A, N> {
-    /// An empty queue with room for `N` timers.
+    /// An empty queue with room for `N` timers. A `const fn`, so a big queue can live in a
+    /// `static` instead of being built on the stack.
     #[must_use]
-    pub fn new() -> TimerQueue<A, N> {
+    #[allow(
+        clippy::arithmetic_side_effects,
+        reason = "i < N < u32::MAX: the loop counter cannot overflow"
+    )]
+    pub const fn new() -> TimerQueue<A, N> {
         const {
             assert!(N > 0, "a timer queue holds at least one timer");
             assert!(N < NIL as usize, "at most u32::MAX - 1 timers");
         }
-        let mut next = 0u32;
         let mut entries = [const {
             Entry {
                 action: None,
@@ -123,12 +130,15 @@ impl<A, const N: usize> TimerQueue<A, N> {
                 slot: 0,
             }
         }; N];
-        for e in &mut entries {
-            next = next.saturating_add(1);
-            e.next = next;
-        }
-        if let Some(last) = entries.last_mut() {
-            last.next = NIL;
+        // The free list runs through every entry in order; N < u32::MAX was checked above.
+        let mut i = 0;
+        while i + 1 < N {
+            #[allow(clippy::indexing_slicing, reason = "i + 1 < N")]
+            #[allow(clippy::cast_possible_truncation, reason = "N < u32::MAX")]
+            {
+                entries[i].next = (i + 1) as u32;
+            }
+            i += 1;
         }
         TimerQueue {
             entries,
@@ -322,11 +332,18 @@ impl<A, const N: usize> TimerQueue<A, N> {
     fn release(&mut self, index: u32) -> Option<A> {
         let e = self.entries.get_mut(idx(index))?;
         let action = e.action.take()?;
-        e.generation = e.generation.wrapping_add(1);
-        e.next = self.free;
         e.prev = NIL;
-        self.free = index;
         self.len = self.len.saturating_sub(1);
+        match e.generation.checked_add(1) {
+            Some(generation) => {
+                e.generation = generation;
+                e.next = self.free;
+                self.free = index;
+            }
+            // Every generation of this place has been handed out: a new timer here could get
+            // the generation of a stale handle, so the place is retired.
+            None => e.next = NIL,
+        }
         Some(action)
     }
 
@@ -405,6 +422,46 @@ mod tests {
         q.replace(a, 10).unwrap();
         assert_eq!(q.remaining(a), Some(10));
         assert_eq!(drain(&mut q, 10), [(10, 1), (10, 0)]);
+    }
+
+    #[test]
+    fn a_place_whose_generations_are_used_up_is_retired() {
+        let mut q: TimerQueue<u8, 2> = TimerQueue::new();
+        // Place 0 has handed out every generation but the last.
+        if let Some(e) = q.entries.get_mut(0) {
+            e.generation = u32::MAX;
+        }
+        let last = q.insert(5, 1).unwrap();
+        assert_eq!(
+            last,
+            TimerId {
+                index: 0,
+                generation: u32::MAX
+            }
+        );
+        assert_eq!(q.remove(last), Some(1));
+        // A wrapped generation would be 0 again; the place is retired instead.
+        let other = q.insert(5, 2).unwrap();
+        assert_eq!(other.index, 1);
+        assert!(
+            matches!(q.insert(5, 3), Err(QueueFull(3))),
+            "room for one timer fewer"
+        );
+        assert_eq!(
+            q.remove(TimerId {
+                index: 0,
+                generation: 0
+            }),
+            None
+        );
+        assert_eq!(q.remove(last), None);
+        assert_eq!(q.len(), 1);
+    }
+
+    #[test]
+    fn big_queues_live_in_statics() {
+        static QUEUE: TimerQueue<u16, 4096> = TimerQueue::new();
+        assert_eq!(QUEUE.len(), 0);
     }
 
     #[test]
