@@ -46,6 +46,8 @@ pub enum StretchConfigError {
     ZeroReference,
     /// `confirmations` is 0: at least one measurement is needed.
     ZeroConfirmations,
+    /// A starting (or stored) DIA of 0: no chain has 0 pulses between its initiators.
+    ZeroMeasurement,
 }
 
 impl fmt::Display for StretchConfigError {
@@ -55,6 +57,7 @@ impl fmt::Display for StretchConfigError {
             StretchConfigError::ZeroConfirmations => {
                 f.write_str("confirmations must be at least 1, got 0")
             }
+            StretchConfigError::ZeroMeasurement => f.write_str("the DIA must not be 0"),
         }
     }
 }
@@ -109,8 +112,13 @@ pub enum Measurement {
 /// assert_eq!(meter.stretch_per_mille(), 5);
 /// # Ok::<(), regler_chain_tracker::StretchConfigError>(())
 /// ```
+///
+/// Deserializing checks what [`StretchMeter::with_dia`] checks, and that a half-confirmed
+/// candidate is below `confirmations`: stored data with SIA 0, no confirmations or a DIA of 0 is
+/// an error, never a meter that divides by zero or accepts anything.
 #[derive(Clone, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "RawStretchMeter"))]
 pub struct StretchMeter {
     config: StretchConfig,
     accepted: u32,
@@ -119,6 +127,39 @@ pub struct StretchMeter {
     measurements: u32,
     rejected: u32,
     orphan_ends: u32,
+}
+
+/// The stored form of a [`StretchMeter`], checked on the way in.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct RawStretchMeter {
+    config: StretchConfig,
+    accepted: u32,
+    counting: Option<u32>,
+    candidate: Option<(u32, u8)>,
+    measurements: u32,
+    rejected: u32,
+    orphan_ends: u32,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<RawStretchMeter> for StretchMeter {
+    type Error = StretchConfigError;
+    fn try_from(raw: RawStretchMeter) -> Result<StretchMeter, StretchConfigError> {
+        let meter = StretchMeter::with_dia(raw.config, raw.accepted)?;
+        // A candidate seen `confirmations` times would have been accepted already.
+        let candidate = raw
+            .candidate
+            .filter(|&(dia, seen)| dia != 0 && seen < raw.config.confirmations);
+        Ok(StretchMeter {
+            counting: raw.counting,
+            candidate,
+            measurements: raw.measurements,
+            rejected: raw.rejected,
+            orphan_ends: raw.orphan_ends,
+            ..meter
+        })
+    }
 }
 
 impl StretchMeter {
@@ -137,6 +178,9 @@ impl StretchMeter {
         }
         if config.confirmations == 0 {
             return Err(StretchConfigError::ZeroConfirmations);
+        }
+        if dia == 0 {
+            return Err(StretchConfigError::ZeroMeasurement);
         }
         Ok(StretchMeter {
             config,

@@ -2,7 +2,7 @@
 #![cfg(feature = "serde")]
 #![allow(clippy::unwrap_used, reason = "a test may panic: that is how it fails")]
 
-use regler_chain_tracker::{DistanceTable, Snapshot, Tracker};
+use regler_chain_tracker::{DistanceTable, Snapshot, StretchConfig, StretchMeter, Tracker};
 
 #[test]
 fn snapshot_round_trips_through_serde() {
@@ -22,4 +22,30 @@ fn snapshot_round_trips_through_serde() {
     after.advance(60, |e| b.push(e));
     assert_eq!(a, b);
     assert_eq!(a.len(), 8, "four sets and four resets");
+}
+
+/// A stored stretch meter that breaks an invariant is an error, never a broken meter.
+#[test]
+fn bad_stored_stretch_meters_are_refused() {
+    let meter = StretchMeter::with_dia(StretchConfig::new(3000), 2990).unwrap();
+    let text = serde_json::to_string(&meter).unwrap();
+    assert_eq!(serde_json::from_str::<StretchMeter>(&text).unwrap(), meter);
+    let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for (field, bad, message) in [
+        ("sia", 0, "sia must not be 0"),
+        ("confirmations", 0, "confirmations must be at least 1"),
+    ] {
+        let mut v = value.clone();
+        v["config"][field] = serde_json::json!(bad);
+        let err = serde_json::from_value::<StretchMeter>(v)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(message), "{field}: {err}");
+    }
+    value["accepted"] = serde_json::json!(0);
+    let err = serde_json::from_value::<StretchMeter>(value)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("DIA must not be 0"), "{err}");
+    assert!(StretchMeter::with_dia(StretchConfig::new(3000), 0).is_err());
 }

@@ -276,8 +276,13 @@ impl RTrig {
     }
 }
 
-/// F_TRIG: Q is on for the one call in which CLK goes from on to off. As in the standard, the
-/// detector starts as if CLK had been off, so it does not fire on its first call.
+/// F_TRIG: Q is on for the one call in which CLK goes from on to off.
+///
+/// Where the editions differ: this follows the 3rd edition (IEC 61131-3:2013), whose memory
+/// starts as if CLK had been off, so a detector whose first call sees CLK off does not fire. The
+/// 2nd edition's ST body (as matiec has it: `Q := NOT CLK AND NOT M; M := NOT CLK;` with M
+/// initially FALSE) fires on that first call. The other blocks here behave the same in both
+/// editions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]

@@ -4,10 +4,12 @@ use core::fmt;
 
 use heapless::Vec;
 
-/// A date and time of day (proleptic Gregorian calendar, no time zone).
+/// A date and time of day (proleptic Gregorian calendar, no time zone). Deserializing checks
+/// every field as [`DateTime::new`] does: a stored 31 February is an error, not a clock.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "RawDateTime"))]
 pub struct DateTime {
     year: u16,
     month: u8,
@@ -18,18 +20,73 @@ pub struct DateTime {
     millis: u16,
 }
 
-/// A date or time that does not exist.
+/// A date or time that does not exist, naming the field that is wrong.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct InvalidDateTime;
+#[non_exhaustive]
+pub enum InvalidDateTime {
+    /// The year is not within 1..=9999.
+    Year(u16),
+    /// The month is not within 1..=12.
+    Month(u8),
+    /// The month has no such day.
+    Day {
+        /// The day asked for.
+        day: u8,
+        /// Days in that month of that year.
+        days_in_month: u8,
+    },
+    /// The hour is not within 0..=23.
+    Hour(u8),
+    /// The minute is not within 0..=59.
+    Minute(u8),
+    /// The second is not within 0..=59.
+    Second(u8),
+    /// Stored milliseconds not within 0..=999.
+    Millis(u16),
+}
 
 impl fmt::Display for InvalidDateTime {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("no such date or time (year 1..=9999, month 1..=12, a day of that month, 00:00:00 to 23:59:59)")
+        match *self {
+            InvalidDateTime::Year(y) => write!(f, "the year must be 1..=9999, got {y}"),
+            InvalidDateTime::Month(m) => write!(f, "the month must be 1..=12, got {m}"),
+            InvalidDateTime::Day { day, days_in_month } => {
+                write!(
+                    f,
+                    "the day must be 1..={days_in_month} in that month, got {day}"
+                )
+            }
+            InvalidDateTime::Hour(h) => write!(f, "the hour must be 0..=23, got {h}"),
+            InvalidDateTime::Minute(m) => write!(f, "the minute must be 0..=59, got {m}"),
+            InvalidDateTime::Second(s) => write!(f, "the second must be 0..=59, got {s}"),
+            InvalidDateTime::Millis(ms) => write!(f, "the milliseconds must be 0..=999, got {ms}"),
+        }
     }
 }
 
 impl core::error::Error for InvalidDateTime {}
+
+/// The stored form of a [`DateTime`], checked on the way in.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct RawDateTime {
+    year: u16,
+    month: u8,
+    day: u8,
+    hour: u8,
+    minute: u8,
+    second: u8,
+    millis: u16,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<RawDateTime> for DateTime {
+    type Error = InvalidDateTime;
+    fn try_from(r: RawDateTime) -> Result<DateTime, InvalidDateTime> {
+        DateTime::checked(r.year, r.month, r.day, r.hour, r.minute, r.second, r.millis)
+    }
+}
 
 fn leap(year: u16) -> bool {
     (year.is_multiple_of(4) && !year.is_multiple_of(100)) || year.is_multiple_of(400)
@@ -69,27 +126,65 @@ impl DateTime {
         minute: u8,
         second: u8,
     ) -> Result<DateTime, InvalidDateTime> {
-        let ok = (1..=9999).contains(&year)
-            && (1..=12).contains(&month)
-            && day >= 1
-            && day <= days_in_month(year, month)
-            && hour < 24
-            && minute < 60
-            && second < 60;
-        if ok {
-            Ok(DateTime {
-                year,
-                month,
-                day,
-                hour,
-                minute,
-                second,
-                millis: 0,
-            })
-        } else {
-            Err(InvalidDateTime)
-        }
+        DateTime::checked(year, month, day, hour, minute, second, 0)
     }
+
+    fn checked(
+        year: u16,
+        month: u8,
+        day: u8,
+        hour: u8,
+        minute: u8,
+        second: u8,
+        millis: u16,
+    ) -> Result<DateTime, InvalidDateTime> {
+        if !(1..=9999).contains(&year) {
+            return Err(InvalidDateTime::Year(year));
+        }
+        if !(1..=12).contains(&month) {
+            return Err(InvalidDateTime::Month(month));
+        }
+        let days = days_in_month(year, month);
+        if day < 1 || day > days {
+            return Err(InvalidDateTime::Day {
+                day,
+                days_in_month: days,
+            });
+        }
+        if hour > 23 {
+            return Err(InvalidDateTime::Hour(hour));
+        }
+        if minute > 59 {
+            return Err(InvalidDateTime::Minute(minute));
+        }
+        if second > 59 {
+            return Err(InvalidDateTime::Second(second));
+        }
+        if millis > 999 {
+            return Err(InvalidDateTime::Millis(millis));
+        }
+        Ok(DateTime {
+            year,
+            month,
+            day,
+            hour,
+            minute,
+            second,
+            millis,
+        })
+    }
+
+    /// The last moment the calendar holds: 9999-12-31 23:59:59.999, where
+    /// [`advance`](DateTime::advance) stops.
+    pub const END: DateTime = DateTime {
+        year: 9999,
+        month: 12,
+        day: 31,
+        hour: 23,
+        minute: 59,
+        second: 59,
+        millis: 999,
+    };
 
     /// Year.
     #[must_use]
@@ -167,7 +262,8 @@ impl DateTime {
         u8::try_from(week).unwrap_or(1)
     }
 
-    /// Advances by `ms` milliseconds; returns how many whole minutes began on the way.
+    /// Advances by `ms` milliseconds; returns how many whole minutes began on the way. The
+    /// clock stops at [`DateTime::END`] rather than wrapping into an earlier year.
     pub fn advance(&mut self, ms: u32) -> u32 {
         let mut minutes = 0u32;
         let total = u32::from(self.millis).saturating_add(ms % 1000);
@@ -202,8 +298,12 @@ impl DateTime {
             if self.month <= 12 {
                 continue;
             }
+            if self.year >= 9999 {
+                *self = DateTime::END;
+                return minutes;
+            }
             self.month = 1;
-            self.year = self.year.saturating_add(1).min(9999);
+            self.year = self.year.saturating_add(1);
         }
         minutes
     }
@@ -255,6 +355,41 @@ pub struct Start<P> {
     pub program: P,
 }
 
+/// Why [`MinuteTable::add`] refused a line; the line is handed back.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum AddError<P> {
+    /// The table has no room for another line.
+    Full(Start<P>),
+    /// The hour is above 23 or the minute above 59.
+    InvalidTime(Start<P>),
+}
+
+impl<P> AddError<P> {
+    /// The line that was refused.
+    pub fn into_start(self) -> Start<P> {
+        match self {
+            AddError::Full(s) | AddError::InvalidTime(s) => s,
+        }
+    }
+}
+
+impl<P> fmt::Display for AddError<P> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            AddError::Full(_) => f.write_str("the minute table is full"),
+            AddError::InvalidTime(s) => write!(
+                f,
+                "no such time of day: {:02}:{:02} (hours 0-23, minutes 0-59)",
+                s.hour, s.minute
+            ),
+        }
+    }
+}
+
+impl<P: fmt::Debug> core::error::Error for AddError<P> {}
+
 /// The source's minute table: each whole minute the table is checked for programs to start then
 /// (it switched between six sorting schedules and printed statistics at 24:00).
 ///
@@ -286,12 +421,12 @@ impl<P, const M: usize> MinuteTable<P, M> {
         MinuteTable { starts: Vec::new() }
     }
 
-    /// Adds a line; a full table or an impossible time hands it back.
-    pub fn add(&mut self, start: Start<P>) -> Result<(), Start<P>> {
+    /// Adds a line; a full table or an impossible time is an error that hands the line back.
+    pub fn add(&mut self, start: Start<P>) -> Result<(), AddError<P>> {
         if start.hour > 23 || start.minute > 59 {
-            return Err(start);
+            return Err(AddError::InvalidTime(start));
         }
-        self.starts.push(start)
+        self.starts.push(start).map_err(AddError::Full)
     }
 
     /// The programs to start in the minute `now` lies in.
@@ -312,6 +447,61 @@ impl<P, const M: usize> MinuteTable<P, M> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn errors_name_the_field_and_the_clock_stops_at_the_end() {
+        assert_eq!(
+            DateTime::new(2026, 2, 29, 0, 0, 0),
+            Err(InvalidDateTime::Day {
+                day: 29,
+                days_in_month: 28
+            })
+        );
+        assert_eq!(
+            DateTime::new(0, 1, 1, 0, 0, 0),
+            Err(InvalidDateTime::Year(0))
+        );
+        assert_eq!(
+            DateTime::new(2026, 13, 1, 0, 0, 0),
+            Err(InvalidDateTime::Month(13))
+        );
+        assert_eq!(
+            DateTime::new(2026, 1, 1, 24, 0, 0),
+            Err(InvalidDateTime::Hour(24))
+        );
+        assert_eq!(
+            DateTime::new(2026, 1, 1, 0, 60, 0),
+            Err(InvalidDateTime::Minute(60))
+        );
+        assert_eq!(
+            DateTime::new(2026, 1, 1, 0, 0, 60).unwrap_err().to_string(),
+            "the second must be 0..=59, got 60"
+        );
+        let mut late = DateTime::new(9999, 12, 31, 23, 59, 0).unwrap();
+        assert_eq!(late.advance(120_000), 1, "one minute began before the end");
+        assert_eq!(late, DateTime::END, "stops, does not wrap to 9999-01-01");
+        late.advance(u32::MAX);
+        assert_eq!(late, DateTime::END);
+    }
+
+    #[test]
+    fn minute_table_says_why_it_refused() {
+        let mut table: MinuteTable<u8, 1> = MinuteTable::new();
+        let start = |hour, program| Start {
+            hour,
+            minute: 0,
+            days: Weekdays::ALL,
+            program,
+        };
+        assert_eq!(
+            table.add(start(24, 1)),
+            Err(AddError::InvalidTime(start(24, 1)))
+        );
+        table.add(start(6, 2)).unwrap();
+        let full = table.add(start(7, 3)).unwrap_err();
+        assert_eq!(full, AddError::Full(start(7, 3)));
+        assert_eq!(full.into_start().program, 3);
+    }
 
     #[test]
     fn weekdays_and_iso_weeks() {

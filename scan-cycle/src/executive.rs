@@ -103,8 +103,9 @@ pub enum Breakpoint {
     OutputOff(usize),
 }
 
-/// Cycle statistics, as the source measured its load.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// Cycle statistics, as the source measured its load. Before the first cycle `min_us` is
+/// `u32::MAX` (no cycle yet), in [`CycleStats::NONE`], [`Default`] and a new executive alike.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct CycleStats {
@@ -126,7 +127,25 @@ pub struct CycleStats {
     pub spool_jobs: u64,
 }
 
+impl Default for CycleStats {
+    fn default() -> CycleStats {
+        CycleStats::NONE
+    }
+}
+
 impl CycleStats {
+    /// No cycle yet.
+    pub const NONE: CycleStats = CycleStats {
+        cycles: 0,
+        last_us: 0,
+        min_us: u32::MAX,
+        max_us: 0,
+        total_us: 0,
+        jitter_us: 0,
+        overruns: 0,
+        spool_jobs: 0,
+    };
+
     /// Mean busy time, µs.
     #[must_use]
     pub fn mean_us(&self) -> u32 {
@@ -266,16 +285,7 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
             conditioning: Conditioning::new(),
             force_inputs: Forcing::new(),
             force_outputs: Forcing::new(),
-            stats: CycleStats {
-                cycles: 0,
-                last_us: 0,
-                min_us: u32::MAX,
-                max_us: 0,
-                total_us: 0,
-                jitter_us: 0,
-                overruns: 0,
-                spool_jobs: 0,
-            },
+            stats: CycleStats::NONE,
             state: State::Running,
             cycle: 0,
             last_start_us: None,
@@ -888,6 +898,13 @@ mod tests {
         );
         assert!(by_condition && why.is_none());
         assert!(plc.cycle_count().is_multiple_of(10));
+    }
+
+    #[test]
+    fn cycle_stats_start_alike_everywhere() {
+        let plc = Executive::<2, 1>::new(CycleConfig::source());
+        assert_eq!(*plc.stats(), CycleStats::default());
+        assert_eq!(CycleStats::default().min_us, u32::MAX);
     }
 
     #[test]

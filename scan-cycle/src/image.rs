@@ -27,6 +27,28 @@ impl fmt::Display for PointError {
 
 impl core::error::Error for PointError {}
 
+/// A word number outside an image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct WordError {
+    /// The word asked for.
+    pub word: usize,
+    /// Words in the image.
+    pub words: usize,
+}
+
+impl fmt::Display for WordError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "I/O word {} is outside the image of {} words",
+            self.word, self.words
+        )
+    }
+}
+
+impl core::error::Error for WordError {}
+
 /// A process image: `W` words of 16 points; point `p` is bit `p % 16` of word `p / 16`.
 ///
 /// ```
@@ -104,11 +126,10 @@ impl<const W: usize> Image<W> {
     }
 
     /// Sets word `index`.
-    pub fn set_word(&mut self, index: usize, value: u16) -> Result<(), PointError> {
-        let points = Self::POINTS;
-        let word = self.words.get_mut(index).ok_or(PointError {
-            point: index.saturating_mul(16),
-            points,
+    pub fn set_word(&mut self, index: usize, value: u16) -> Result<(), WordError> {
+        let word = self.words.get_mut(index).ok_or(WordError {
+            word: index,
+            words: W,
         })?;
         *word = value;
         Ok(())
@@ -236,15 +257,61 @@ impl<const W: usize> Forcing<W> {
 /// an input is counting applies to the readings already counted: lowered below them, the next
 /// differing reading changes the value. The counters are bit-sliced, four bit planes per word,
 /// so a cycle costs a few dozen word operations per 16 inputs, whatever the counts.
+///
+/// Deserializing checks that every point's debounce count is 1..=15: a stored count of 0 (a
+/// corrupt block) is an error, not an input that never debounces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "RawConditioning<W>"))]
 pub struct Conditioning<const W: usize> {
     latched: Image<W>,
     pending: Image<W>,
     stable: Image<W>,
     counters: [Image<W>; 4],
     thresholds: [Image<W>; 4],
+}
+
+/// The stored form of a [`Conditioning`], checked on the way in.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct RawConditioning<const W: usize> {
+    latched: Image<W>,
+    pending: Image<W>,
+    stable: Image<W>,
+    counters: [Image<W>; 4],
+    thresholds: [Image<W>; 4],
+}
+
+#[cfg(feature = "serde")]
+impl<const W: usize> TryFrom<RawConditioning<W>> for Conditioning<W> {
+    type Error = DebounceError;
+    fn try_from(raw: RawConditioning<W>) -> Result<Conditioning<W>, DebounceError> {
+        // A point with all four threshold bits clear has count 0.
+        let [k0, k1, k2, k3] = &raw.thresholds;
+        for (w, (((a, b), c), d)) in k0
+            .words
+            .iter()
+            .zip(&k1.words)
+            .zip(&k2.words)
+            .zip(&k3.words)
+            .enumerate()
+        {
+            let zero = !(a | b | c | d);
+            if zero != 0 {
+                let bit = usize::try_from(zero.trailing_zeros()).unwrap_or(0);
+                let point = w.saturating_mul(POINTS_PER_WORD).saturating_add(bit);
+                return Err(DebounceError::StoredCount { point, count: 0 });
+            }
+        }
+        Ok(Conditioning {
+            latched: raw.latched,
+            pending: raw.pending,
+            stable: raw.stable,
+            counters: raw.counters,
+            thresholds: raw.thresholds,
+        })
+    }
 }
 
 impl<const W: usize> Default for Conditioning<W> {
@@ -256,11 +323,19 @@ impl<const W: usize> Default for Conditioning<W> {
 /// A debounce count outside 1..=15.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum DebounceError {
     /// The point is outside the image.
     Point(PointError),
     /// The count is not within 1..=15.
     Count(u8),
+    /// Stored conditioning (deserialized) gives a point a count outside 1..=15.
+    StoredCount {
+        /// The point.
+        point: usize,
+        /// Its stored count.
+        count: u8,
+    },
 }
 
 impl fmt::Display for DebounceError {
@@ -268,6 +343,10 @@ impl fmt::Display for DebounceError {
         match self {
             DebounceError::Point(e) => e.fmt(f),
             DebounceError::Count(k) => write!(f, "a debounce count is 1..=15 readings, got {k}"),
+            DebounceError::StoredCount { point, count } => write!(
+                f,
+                "stored conditioning gives point {point} a debounce count of {count}, not 1..=15"
+            ),
         }
     }
 }
@@ -402,6 +481,16 @@ mod tests {
         f.unforce(3).unwrap();
         assert_eq!(f.forced(3), None);
         assert!(f.force(32, true).is_err());
+    }
+
+    #[test]
+    fn set_word_names_the_word() {
+        let mut img: Image<2> = Image::new();
+        assert_eq!(img.set_word(2, 1), Err(WordError { word: 2, words: 2 }));
+        assert_eq!(
+            img.set_word(5, 1).unwrap_err().to_string(),
+            "I/O word 5 is outside the image of 2 words"
+        );
     }
 
     #[test]

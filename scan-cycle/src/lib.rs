@@ -18,10 +18,12 @@ mod image;
 mod timer_queue;
 
 pub use blocks::{Ctd, Ctu, Ctud, FTrig, RTrig, Rs, Sr, Tof, Ton, Tp};
-pub use calendar::{DateTime, InvalidDateTime, MinuteTable, Start, Weekdays};
+pub use calendar::{AddError, DateTime, InvalidDateTime, MinuteTable, Start, Weekdays};
 pub use executive::{
     Breakpoint, Condition, CycleConfig, CycleStats, Executive, Halt, Io, Routine, Scan, Spool,
     StepChain,
 };
-pub use image::{Conditioning, DebounceError, Forcing, Image, POINTS_PER_WORD, PointError};
+pub use image::{
+    Conditioning, DebounceError, Forcing, Image, POINTS_PER_WORD, PointError, WordError,
+};
 pub use timer_queue::{QueueFull, TimerId, TimerQueue, UnknownTimer};

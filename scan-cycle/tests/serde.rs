@@ -2,7 +2,7 @@
 #![cfg(feature = "serde")]
 #![allow(clippy::unwrap_used, reason = "a test may panic: that is how it fails")]
 
-use regler_scan_cycle::{Ctu, Image, Ton};
+use regler_scan_cycle::{Conditioning, Ctu, DateTime, Image, Ton};
 
 #[test]
 fn images_and_blocks_round_trip() {
@@ -25,4 +25,29 @@ fn images_and_blocks_round_trip() {
     ctu.call(true, false);
     let back: Ctu = serde_json::from_str(&serde_json::to_string(&ctu).unwrap()).unwrap();
     assert_eq!(back.cv(), 1);
+}
+
+/// Stored state that breaks an invariant is an error, never a broken object.
+#[test]
+fn bad_stored_state_is_refused() {
+    let clock = DateTime::new(2026, 2, 28, 23, 59, 59).unwrap();
+    let text = serde_json::to_string(&clock).unwrap();
+    assert_eq!(serde_json::from_str::<DateTime>(&text).unwrap(), clock);
+    let feb31 = text.replace("\"day\":28", "\"day\":31");
+    let err = serde_json::from_str::<DateTime>(&feb31)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("the day must be 1..=28"), "{err}");
+
+    let mut c: Conditioning<2> = Conditioning::new();
+    c.set_debounce(3, 7).unwrap();
+    let text = serde_json::to_string(&c).unwrap();
+    assert_eq!(serde_json::from_str::<Conditioning<2>>(&text).unwrap(), c);
+    // Clear point 0's count-1 bit in the first threshold plane: a count of 0.
+    let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    value["thresholds"][0]["words"][0] = serde_json::json!(0xFFFE);
+    let err = serde_json::from_value::<Conditioning<2>>(value)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("point 0 a debounce count of 0"), "{err}");
 }
