@@ -176,8 +176,8 @@ pub struct Pid<T> {
     i_lo: T,
     i_hi: T,
     d_bound: T,
-    /// Kinds with I clamp the integral every sample; the others hold a constant bias (their
-    /// manual reset), bounded only where it is set.
+    /// Whether the kind has I; the others hold a constant bias (their manual reset), bounded
+    /// only where it is set.
     integrates: bool,
     i: T,
     d: T,
@@ -282,9 +282,23 @@ impl<T: Scalar> Coefficients<T> {
             ymin: limit(config.ymin, Parameter::Ymin, "ymin")?,
             ymax: limit(config.ymax, Parameter::Ymax, "ymax")?,
             dymax,
-            offset_slope: T::from_real(kp * (one - config.b)),
-            i_lo: T::from_real(config.ymin - bound),
-            i_hi: T::from_real(config.ymax + bound),
+            // Kinds without I hold a constant bias (their manual reset): no clamp per sample;
+            // where the bias is set, `bounded_integral` bounds it around the output limits.
+            offset_slope: if kind.has_i() {
+                T::from_real(kp * (one - config.b))
+            } else {
+                T::ZERO
+            },
+            i_lo: if kind.has_i() {
+                T::from_real(config.ymin - bound)
+            } else {
+                T::ZERO.sub(T::MAX)
+            },
+            i_hi: if kind.has_i() {
+                T::from_real(config.ymax + bound)
+            } else {
+                T::MAX
+            },
             integrates: kind.has_i(),
             d_bound: T::from_real(bound),
         })
@@ -419,11 +433,11 @@ impl<T: Scalar> Pid<T> {
             .sub(self.bd.mul(change))
             .flush_tiny()
             .clamp_within(T::ZERO.sub(self.d_bound), self.d_bound);
-        let (v, u, i, manual) = match self.mode {
+        let (v, u, i) = match self.mode {
             Mode::Manual => {
                 // The operator's output stands; I follows so that v = u when auto returns.
                 let u = self.u_old;
-                (u, u, u.sub(p).sub(d), true)
+                (u, u, u.sub(p).sub(d))
             }
             Mode::Auto => {
                 let mut v = p.add(self.i).add(d);
@@ -438,28 +452,22 @@ impl<T: Scalar> Pid<T> {
                 let applied = track.unwrap_or(u);
                 // I + (integral step + tracking), summed in the reference's order.
                 let step = self.bi.mul(r.sub(y)).add(self.ao.mul(applied.sub(v)));
-                (v, u, self.i.add(step), false)
+                (v, u, self.i.add(step))
             }
         };
-        // P is NaN or infinite whenever r or y is (0·∞ is NaN), and both v and the unbounded I
-        // contain P: two checks guard both inputs and overflow, before any clamp could turn an
-        // infinity into a finite bound.
-        if !T::both_finite(v, i) {
+        // The bounds move with the set-point (for kinds without I they are ±MAX and the clamp
+        // changes nothing).
+        let (lo, hi) = self.integral_bounds(r, feedforward);
+        let bounded = i.clamp_within(lo, hi);
+        // P is NaN or infinite whenever r or y is (0·∞ is NaN), and v and the unbounded I both
+        // contain P; the bounds are infinite when an absurd set-point overflows them. One sum
+        // and one test cover all three (a sum of two finite states overflows only beyond
+        // 10³⁸, where a fault is the right answer anyway).
+        if !T::both_finite(v, i.add(bounded)) {
             self.fault(r, y);
             return self.u_old;
         }
-        let i = if self.integrates || manual {
-            // The bounds move with the set-point; an absurd one can overflow them.
-            let (lo, hi) = self.integral_bounds(r, feedforward);
-            let bounded = i.clamp_within(lo, hi);
-            if !bounded.is_finite() {
-                self.fault(r, y);
-                return self.u_old;
-            }
-            bounded
-        } else {
-            i
-        };
+        let i = bounded;
         self.started = true;
         self.i = i;
         self.d = d;
@@ -490,10 +498,13 @@ impl<T: Scalar> Pid<T> {
     /// limits; a non-finite `i` (a new gain so large that the bumpless adjustment overflowed)
     /// becomes the nearest in-bound value to 0.
     fn bounded_integral(&self, i: T) -> T {
-        // A kind without I never moves its bias again, so the bias's bounds must not follow a
-        // set-point that may have been absurd: they sit around the output limits themselves.
-        let r = if self.integrates { self.r_old } else { T::ZERO };
-        let (lo, hi) = self.integral_bounds(r, T::ZERO);
+        // A kind without I never moves its bias again, so its bounds must not follow a set-point
+        // that may have been absurd: they sit around the output limits themselves.
+        let (lo, hi) = if self.integrates {
+            self.integral_bounds(self.r_old, T::ZERO)
+        } else {
+            (self.ymin.sub(self.d_bound), self.ymax.add(self.d_bound))
+        };
         if !T::both_finite(lo, hi) {
             return T::ZERO;
         }
