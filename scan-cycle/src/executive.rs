@@ -6,6 +6,7 @@ use core::fmt;
 use heapless::Deque;
 
 use crate::image::{Conditioning, Forcing, Image, PointError};
+use crate::signals::Signals;
 
 /// The only bridge between the executive and the plant: the program never sees it.
 pub trait Io<const IW: usize, const OW: usize> {
@@ -214,14 +215,6 @@ impl<J, const S: usize> Spool<J, S> {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-enum State {
-    Running,
-    PowerFail,
-    Watchdog,
-}
-
 /// The cyclic executive of the 1989 controller (and the 1977 plant's levels A–C).
 ///
 /// Each [`cycle`](Executive::cycle): read all inputs through [`Io`] into the raw image, condition
@@ -260,7 +253,13 @@ pub struct Executive<const IW: usize, const OW: usize> {
     force_inputs: Forcing<IW>,
     force_outputs: Forcing<OW>,
     stats: CycleStats,
-    state: State,
+    /// The power has failed and not come back.
+    power_failed: bool,
+    /// The watchdog tripped and the operator has not reset it (a power failure keeps it).
+    tripped: bool,
+    /// Where the watchdog counts from before any cycle has finished: it is armed from the
+    /// first check, so a program that never finishes a cycle trips it too.
+    watch_from_us: Option<u32>,
     cycle: u64,
     last_start_us: Option<u32>,
     /// The program's millisecond clock: wraps at 2³² ms like the IEC timers expect (the µs
@@ -286,7 +285,9 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
             force_inputs: Forcing::new(),
             force_outputs: Forcing::new(),
             stats: CycleStats::NONE,
-            state: State::Running,
+            power_failed: false,
+            tripped: false,
+            watch_from_us: None,
             cycle: 0,
             last_start_us: None,
             last_end_us: None,
@@ -303,10 +304,39 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         io: &mut I,
         program: impl FnOnce(&mut Scan<'_, IW, OW>),
     ) -> Result<(), Halt> {
-        match self.state {
-            State::PowerFail => return Err(Halt::PowerFail),
-            State::Watchdog => return Err(Halt::Watchdog),
-            State::Running => {}
+        self.run_cycle(io, None, program)
+    }
+
+    /// One cycle with `program`, supervised through `signals`, whose watchdog, latch capture and
+    /// power failure live with the interrupts (see [`Signals`]). Refused while `signals` says the
+    /// power has failed or the watchdog has tripped. The inputs latched by
+    /// [`Signals::capture`] since the last cycle are read; if the watchdog trips while the program
+    /// runs (from its interrupt), the cycle writes no outputs — the safe outputs stand — and
+    /// returns [`Halt::Watchdog`]. Checking the trip and writing the outputs happen in one
+    /// critical section, so an interrupt cannot slip between them.
+    pub fn cycle_with<I: Io<IW, OW>>(
+        &mut self,
+        io: &mut I,
+        signals: &Signals<IW, OW>,
+        program: impl FnOnce(&mut Scan<'_, IW, OW>),
+    ) -> Result<(), Halt> {
+        self.run_cycle(io, Some(signals), program)
+    }
+
+    fn run_cycle<I: Io<IW, OW>>(
+        &mut self,
+        io: &mut I,
+        signals: Option<&Signals<IW, OW>>,
+        program: impl FnOnce(&mut Scan<'_, IW, OW>),
+    ) -> Result<(), Halt> {
+        if let Some(halt) = self.halted() {
+            return Err(halt);
+        }
+        if let Some(signals) = signals {
+            if let Some(halt) = signals.halted() {
+                return Err(halt);
+            }
+            self.conditioning.capture(&signals.take_captured());
         }
         let start = io.now_us();
         if let Some(last) = self.last_start_us {
@@ -331,10 +361,21 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         });
         self.force_outputs.apply(&mut self.next);
         // Level A: all outputs out, images swapped.
-        io.write_outputs(self.next.words());
+        match signals {
+            None => io.write_outputs(self.next.words()),
+            Some(signals) => {
+                let next = &self.next;
+                if !signals.write_unless_tripped(|| io.write_outputs(next.words())) {
+                    return Err(Halt::Watchdog);
+                }
+            }
+        }
         io.kick_watchdog();
         self.previous = self.next;
         let end = io.now_us();
+        if let Some(signals) = signals {
+            signals.kick(end);
+        }
         self.last_end_us = Some(end);
         let busy = end.wrapping_sub(start);
         let s = &mut self.stats;
@@ -395,52 +436,70 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         done
     }
 
-    /// Checks the watchdog (call it from a clock interrupt or the idle loop): if no cycle has
-    /// finished within the limit, the safe outputs are written and cycles are refused.
-    /// Returns whether the watchdog is (now) tripped.
+    /// Checks the watchdog from the same context as the cycles (the idle loop): if no cycle has
+    /// finished within the limit — counted from the first check when none has finished yet —
+    /// the safe outputs are written and cycles are refused. Returns whether the watchdog is
+    /// (now) tripped.
+    ///
+    /// This sees a hang only between cycles, since [`cycle`](Executive::cycle) holds the
+    /// executive; to catch a program that hangs inside a cycle, check from a timer interrupt
+    /// through [`Signals::check_watchdog`] and run the cycles with
+    /// [`cycle_with`](Executive::cycle_with).
     pub fn check_watchdog<I: Io<IW, OW>>(&mut self, io: &mut I) -> bool {
-        if self.state == State::Watchdog {
+        if self.tripped {
             return true;
         }
-        let Some(end) = self.last_end_us else {
-            return false;
+        if self.power_failed {
+            return false; // an outage is not a hang
+        }
+        let now = io.now_us();
+        let since = match (self.last_end_us, self.watch_from_us) {
+            (Some(end), _) | (None, Some(end)) => end,
+            (None, None) => {
+                self.watch_from_us = Some(now);
+                return false;
+            }
         };
-        if self.state == State::Running && io.now_us().wrapping_sub(end) > self.config.watchdog_us {
+        if now.wrapping_sub(since) > self.config.watchdog_us {
             io.write_outputs(self.config.safe_outputs.words());
-            self.state = State::Watchdog;
+            self.tripped = true;
             self.watchdog_trips = self.watchdog_trips.saturating_add(1);
             return true;
         }
         false
     }
 
-    /// The operator has looked at the trip: cycles may run again.
+    /// The operator has looked at the trip: cycles may run again (the watchdog re-arms at the
+    /// next check).
     pub fn reset_watchdog(&mut self) {
-        if self.state == State::Watchdog {
-            self.state = State::Running;
+        if self.tripped {
+            self.tripped = false;
             self.last_end_us = None;
             self.last_start_us = None;
+            self.watch_from_us = None;
         }
     }
 
     /// Power failure: writes the safe outputs and freezes the state (images, conditioning,
     /// latched inputs, statistics; the program's timers and counters are its own and are not
     /// touched). Latched inputs are still captured, as the source's battery-backed input
-    /// flip-flops did.
+    /// flip-flops did. A watchdog trip stays tripped through the outage.
     pub fn power_fail<I: Io<IW, OW>>(&mut self, io: &mut I) {
         io.write_outputs(self.config.safe_outputs.words());
-        self.state = State::PowerFail;
+        self.power_failed = true;
     }
 
     /// Power is back: the next cycle continues where the last one left off, with the inputs
     /// latched meanwhile. The outage is not counted as jitter, nor as time for the program's
-    /// timers: they resume where they stood.
+    /// timers: they resume where they stood. A watchdog that had tripped stays tripped until
+    /// [`reset_watchdog`](Executive::reset_watchdog): a power cycle is not an operator's reset.
     pub fn resume(&mut self) {
-        if self.state == State::PowerFail {
-            self.state = State::Running;
+        if self.power_failed {
+            self.power_failed = false;
             self.last_start_us = None;
             self.last_end_us = None;
             self.clock_last_us = None;
+            self.watch_from_us = None;
         }
     }
 
@@ -525,10 +584,12 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
     /// Whether cycles are refused, and why.
     #[must_use]
     pub const fn halted(&self) -> Option<Halt> {
-        match self.state {
-            State::Running => None,
-            State::PowerFail => Some(Halt::PowerFail),
-            State::Watchdog => Some(Halt::Watchdog),
+        if self.power_failed {
+            Some(Halt::PowerFail)
+        } else if self.tripped {
+            Some(Halt::Watchdog)
+        } else {
+            None
         }
     }
 
@@ -689,6 +750,7 @@ impl<C, const IW: usize, const OW: usize, const N: usize> StepChain<C, IW, OW, N
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::vec::Vec;
 
     struct Sim {
         inputs: [u16; 2],
@@ -898,6 +960,87 @@ mod tests {
         );
         assert!(by_condition && why.is_none());
         assert!(plc.cycle_count().is_multiple_of(10));
+    }
+
+    #[test]
+    fn the_watchdog_is_armed_from_the_start_and_survives_a_power_cycle() {
+        let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(CycleConfig::source()));
+        io.step_us = 60_000;
+        // No cycle ever finishes: the first check arms, a later one trips.
+        assert!(!plc.check_watchdog(&mut io));
+        assert!(!plc.check_watchdog(&mut io)); // 60 ms
+        assert!(plc.check_watchdog(&mut io)); // 120 ms
+        plc.power_fail(&mut io);
+        assert_eq!(plc.halted(), Some(Halt::PowerFail));
+        plc.resume();
+        assert_eq!(
+            plc.halted(),
+            Some(Halt::Watchdog),
+            "a power cycle is not a reset"
+        );
+        assert_eq!(plc.cycle(&mut io, |_| {}), Err(Halt::Watchdog));
+        plc.reset_watchdog();
+        assert!(plc.cycle(&mut io, |_| {}).is_ok());
+        assert_eq!(plc.watchdog_trips(), 1);
+    }
+
+    #[test]
+    fn signals_trip_inside_a_cycle_and_keep_the_trip_through_power_failure() {
+        let signals: Signals<2, 1> = Signals::new(&CycleConfig::source());
+        let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(CycleConfig::source()));
+        plc.cycle_with(&mut io, &signals, |s| s.outputs.set(0, true).unwrap())
+            .unwrap();
+        let writes = io.writes;
+        // The timer interrupt fires while the program hangs in the cycle.
+        let r = plc.cycle_with(&mut io, &signals, |s| {
+            // 1 s on the Io clock, long after the last cycle ended.
+            assert!(signals.check_watchdog(1_000_000));
+            s.outputs.set(0, false).unwrap();
+        });
+        assert_eq!(r, Err(Halt::Watchdog));
+        assert_eq!(io.writes, writes, "no outputs written after the trip");
+        signals.power_fail();
+        assert_eq!(
+            plc.cycle_with(&mut io, &signals, |_| {}),
+            Err(Halt::PowerFail)
+        );
+        signals.resume();
+        assert_eq!(
+            plc.cycle_with(&mut io, &signals, |_| {}),
+            Err(Halt::Watchdog)
+        );
+        signals.reset_watchdog();
+        assert!(plc.cycle_with(&mut io, &signals, |_| {}).is_ok());
+        assert_eq!(signals.trips(), 1);
+        // Nothing trips while the power is off.
+        signals.power_fail();
+        assert!(!signals.check_watchdog(u32::MAX));
+        signals.resume();
+        assert!(!signals.check_watchdog(0), "re-armed from this check");
+        assert!(signals.check_watchdog(100_001));
+    }
+
+    #[test]
+    fn latched_pulses_captured_by_another_thread_are_read_once() {
+        use std::sync::Arc;
+        let signals: Arc<Signals<2, 1>> = Arc::new(Signals::new(&CycleConfig::source()));
+        let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(CycleConfig::source()));
+        plc.conditioning_mut().set_latched(3, true).unwrap();
+        plc.conditioning_mut().set_latched(20, true).unwrap();
+        // A short pulse on input 3 and one on 20, seen only by the "interrupt" thread; input 5
+        // is not latched, so its pulse is lost as it would be on the real plant.
+        let isr = Arc::clone(&signals);
+        std::thread::spawn(move || isr.capture(&[1 << 3 | 1 << 5, 1 << 4]))
+            .join()
+            .unwrap();
+        let mut seen = Vec::new();
+        for _ in 0..2 {
+            plc.cycle_with(&mut io, &signals, |s| {
+                seen.push((s.inputs.get(3), s.inputs.get(5), s.inputs.get(20)));
+            })
+            .unwrap();
+        }
+        assert_eq!(seen, [(true, false, true), (false, false, false)]);
     }
 
     #[test]

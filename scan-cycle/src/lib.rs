@@ -15,6 +15,7 @@ mod blocks;
 mod calendar;
 mod executive;
 mod image;
+mod signals;
 mod timer_queue;
 
 pub use blocks::{Ctd, Ctu, Ctud, FTrig, RTrig, Rs, Sr, Tof, Ton, Tp};
@@ -26,4 +27,5 @@ pub use executive::{
 pub use image::{
     Conditioning, DebounceError, Forcing, Image, POINTS_PER_WORD, PointError, WordError,
 };
+pub use signals::Signals;
 pub use timer_queue::{QueueFull, TimerId, TimerQueue, UnknownTimer};

@@ -1,0 +1,231 @@
+//! What the interrupts own: the watchdog, the latch capture and the power-failure flag, shared
+//! with the cycle through a critical section.
+
+use core::cell::Cell;
+
+use critical_section::Mutex;
+
+use crate::executive::{CycleConfig, Halt};
+use crate::image::Image;
+
+#[derive(Clone, Copy)]
+struct Shared<const IW: usize> {
+    captured: [u16; IW],
+    /// When the last cycle finished, or when the first check armed the watchdog.
+    kicked_us: Option<u32>,
+    tripped: bool,
+    power_failed: bool,
+    trips: u32,
+}
+
+/// The executive's supervision as interrupt handlers need it: every method takes `&self`, so a
+/// `static Signals` is shared by a timer interrupt (the watchdog), a fast input interrupt
+/// (latch capture), the power-fail interrupt and the main loop that runs
+/// [`Executive::cycle_with`](crate::Executive::cycle_with).
+///
+/// [`Executive::check_watchdog`](crate::Executive::check_watchdog) needs the executive, which
+/// [`cycle`](crate::Executive::cycle) holds for the whole scan, so it can see a hang only between
+/// cycles — not what a watchdog is for. [`Signals::check_watchdog`] runs in the timer interrupt
+/// and trips while the program is stuck inside a cycle.
+///
+/// The state lives in a [`critical_section::Mutex`]; each call holds the critical section for a
+/// few word operations (`capture` for one OR per input word). The firmware provides the critical
+/// section implementation, as for any embedded crate built on `critical-section` (on a
+/// single-core Cortex-M: `cortex-m`'s `critical-section-single-core` feature; on a host:
+/// `critical-section`'s `std` feature). No `unsafe` here.
+///
+/// ```
+/// use regler_scan_cycle::{CycleConfig, Executive, Halt, Io, Signals};
+/// static SIGNALS: Signals<1, 1> = Signals::new(&CycleConfig::source());
+///
+/// struct Plant { t: u32, out: [u16; 1] }
+/// impl Io<1, 1> for Plant {
+///     fn read_inputs(&mut self, raw: &mut [u16; 1]) { *raw = [0]; }
+///     fn write_outputs(&mut self, out: &[u16; 1]) { self.out = *out; }
+///     fn now_us(&mut self) -> u32 { self.t }
+/// }
+/// let mut plant = Plant { t: 0, out: [0] };
+/// let mut plc: Executive<1, 1> = Executive::new(CycleConfig::source());
+/// plc.cycle_with(&mut plant, &SIGNALS, |scan| scan.outputs.set(0, true).unwrap())?;
+/// assert_eq!(plant.out, [1]);
+///
+/// // The program hangs; the timer interrupt checks 150 ms after the last cycle ended.
+/// let result = plc.cycle_with(&mut plant, &SIGNALS, |scan| {
+///     assert!(SIGNALS.check_watchdog(150_000)); // (inside the interrupt handler)
+///     scan.outputs.set(0, true).unwrap();
+/// });
+/// assert_eq!(result, Err(Halt::Watchdog)); // the cycle wrote nothing after the trip
+/// assert_eq!(SIGNALS.safe_outputs().words(), &[0]); // what the handler wrote
+/// # Ok::<(), Halt>(())
+/// ```
+pub struct Signals<const IW: usize, const OW: usize> {
+    shared: Mutex<Cell<Shared<IW>>>,
+    watchdog_us: u32,
+    safe_outputs: Image<OW>,
+}
+
+impl<const IW: usize, const OW: usize> Signals<IW, OW> {
+    /// Supervision with `config`'s watchdog limit and safe outputs. A `const fn`, for a
+    /// `static`.
+    #[must_use]
+    pub const fn new(config: &CycleConfig<OW>) -> Signals<IW, OW> {
+        Signals {
+            shared: Mutex::new(Cell::new(Shared {
+                captured: [0; IW],
+                kicked_us: None,
+                tripped: false,
+                power_failed: false,
+                trips: 0,
+            })),
+            watchdog_us: config.watchdog_us,
+            safe_outputs: config.safe_outputs,
+        }
+    }
+
+    fn update<R>(&self, f: impl FnOnce(&mut Shared<IW>) -> R) -> R {
+        critical_section::with(|cs| {
+            let cell = self.shared.borrow(cs);
+            let mut shared = cell.get();
+            let r = f(&mut shared);
+            cell.set(shared);
+            r
+        })
+    }
+
+    fn read(&self) -> Shared<IW> {
+        critical_section::with(|cs| self.shared.borrow(cs).get())
+    }
+
+    /// From the timer interrupt, with the time now in µs (the [`Io`](crate::Io) clock): trips
+    /// the watchdog when no cycle has finished within the limit — counted from the first check
+    /// while none has, so a program that never completes a cycle trips it too. Returns `true`
+    /// when it trips now: the handler must then write [`safe_outputs`](Signals::safe_outputs).
+    /// A power failure is not a hang: while it lasts nothing trips.
+    pub fn check_watchdog(&self, now_us: u32) -> bool {
+        let limit = self.watchdog_us;
+        self.update(|s| {
+            if s.tripped || s.power_failed {
+                return false;
+            }
+            match s.kicked_us {
+                None => {
+                    s.kicked_us = Some(now_us);
+                    false
+                }
+                Some(kicked) if now_us.wrapping_sub(kicked) > limit => {
+                    s.tripped = true;
+                    s.trips = s.trips.saturating_add(1);
+                    true
+                }
+                Some(_) => false,
+            }
+        })
+    }
+
+    /// From a fast input interrupt: remembers which inputs are on now; the next cycle reads
+    /// each latched input that was on in any capture since the last cycle (see
+    /// [`Conditioning`](crate::Conditioning)). Captures go on through a power failure, as the
+    /// source's battery-backed input flip-flops did.
+    pub fn capture(&self, raw: &[u16; IW]) {
+        self.update(|s| {
+            for (c, r) in s.captured.iter_mut().zip(raw) {
+                *c |= r;
+            }
+        });
+    }
+
+    /// From the power-fail interrupt: cycles are refused until [`resume`](Signals::resume).
+    /// The handler writes [`safe_outputs`](Signals::safe_outputs). A watchdog trip stays.
+    pub fn power_fail(&self) {
+        self.update(|s| s.power_failed = true);
+    }
+
+    /// Power is back: cycles may run again (unless the watchdog had tripped: a power cycle is
+    /// not an operator's reset). The watchdog re-arms at its next check.
+    pub fn resume(&self) {
+        self.update(|s| {
+            s.power_failed = false;
+            s.kicked_us = None;
+        });
+    }
+
+    /// The operator has looked at the trip: cycles may run again; the watchdog re-arms at its
+    /// next check.
+    pub fn reset_watchdog(&self) {
+        self.update(|s| {
+            s.tripped = false;
+            s.kicked_us = None;
+        });
+    }
+
+    /// Whether the watchdog has tripped (and not been reset).
+    #[must_use]
+    pub fn tripped(&self) -> bool {
+        self.read().tripped
+    }
+
+    /// Whether the power has failed and not come back.
+    #[must_use]
+    pub fn power_failed(&self) -> bool {
+        self.read().power_failed
+    }
+
+    /// Times the watchdog tripped.
+    #[must_use]
+    pub fn trips(&self) -> u32 {
+        self.read().trips
+    }
+
+    /// The outputs to write on a trip or a power failure.
+    #[must_use]
+    pub const fn safe_outputs(&self) -> &Image<OW> {
+        &self.safe_outputs
+    }
+
+    /// Why cycles are refused, if they are.
+    pub(crate) fn halted(&self) -> Option<Halt> {
+        let s = self.read();
+        if s.power_failed {
+            Some(Halt::PowerFail)
+        } else if s.tripped {
+            Some(Halt::Watchdog)
+        } else {
+            None
+        }
+    }
+
+    /// The inputs captured since the last call, cleared.
+    pub(crate) fn take_captured(&self) -> [u16; IW] {
+        self.update(|s| core::mem::replace(&mut s.captured, [0; IW]))
+    }
+
+    /// Runs `write` unless the watchdog has tripped, in one critical section; returns whether
+    /// it ran.
+    pub(crate) fn write_unless_tripped(&self, write: impl FnOnce()) -> bool {
+        critical_section::with(|cs| {
+            if self.shared.borrow(cs).get().tripped {
+                false
+            } else {
+                write();
+                true
+            }
+        })
+    }
+
+    /// A cycle finished at `now_us`.
+    pub(crate) fn kick(&self, now_us: u32) {
+        self.update(|s| s.kicked_us = Some(now_us));
+    }
+}
+
+impl<const IW: usize, const OW: usize> core::fmt::Debug for Signals<IW, OW> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let s = self.read();
+        f.debug_struct("Signals")
+            .field("tripped", &s.tripped)
+            .field("power_failed", &s.power_failed)
+            .field("trips", &s.trips)
+            .field("watchdog_us", &self.watchdog_us)
+            .finish_non_exhaustive()
+    }
+}
