@@ -2,8 +2,6 @@
 
 use core::fmt;
 
-use heapless::Vec;
-
 /// Why [`correct`] could not give a distance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -143,31 +141,50 @@ impl core::error::Error for TableError {}
 /// assert_eq!(table.stretch_per_mille(), 5);
 /// # Ok::<(), regler_chain_tracker::TableError>(())
 /// ```
-#[derive(Clone, Debug, PartialEq, Eq)]
+///
+/// A `DistanceTable<T>` is `8·T + 8` bytes plus a `usize` (two lists of `T` distances, SIA,
+/// DIA and the number of tippers), and [`new`](DistanceTable::new) is a `const fn`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct DistanceTable<const T: usize> {
     sia: u32,
     dia: u32,
-    sa: Vec<u32, T>,
-    da: Vec<u32, T>,
+    len: usize,
+    /// Entries beyond `len` are 0, so the derived equality compares only the lists.
+    sa: [u32; T],
+    da: [u32; T],
 }
 
 impl<const T: usize> DistanceTable<T> {
     /// A table for a new chain: `sia` pulses between the initiators and `sa[i]` pulses from the
     /// reader to tipper `i`. DIA starts equal to SIA, so DA equals SA.
-    pub fn new(sia: u32, sa: &[u32]) -> Result<DistanceTable<T>, TableError> {
+    pub const fn new(sia: u32, sa: &[u32]) -> Result<DistanceTable<T>, TableError> {
         if sia == 0 {
             return Err(TableError::ZeroReference);
         }
-        let too_many = TableError::TooManyTippers {
-            given: sa.len(),
-            capacity: T,
-        };
-        let sa = Vec::from_slice(sa).map_err(|_| too_many)?;
+        if sa.len() > T {
+            return Err(TableError::TooManyTippers {
+                given: sa.len(),
+                capacity: T,
+            });
+        }
+        let mut list = [0u32; T];
+        let (mut rest, mut i) = (sa, 0usize);
+        while let [first, tail @ ..] = rest {
+            if i < T {
+                #[allow(clippy::indexing_slicing, reason = "i < T just checked")]
+                {
+                    list[i] = *first;
+                }
+            }
+            rest = tail;
+            i = i.saturating_add(1);
+        }
         Ok(DistanceTable {
             sia,
             dia: sia,
-            da: sa.clone(),
-            sa,
+            len: sa.len(),
+            sa: list,
+            da: list,
         })
     }
 
@@ -183,23 +200,25 @@ impl<const T: usize> DistanceTable<T> {
     }
 
     /// The dynamic list DIA would give, without changing the table.
-    pub(crate) fn corrected(&self, dia: u32) -> Result<Vec<u32, T>, TableError> {
+    pub(crate) fn corrected(&self, dia: u32) -> Result<[u32; T], TableError> {
         if dia == 0 {
             return Err(TableError::ZeroMeasurement);
         }
-        let mut da = Vec::new();
-        for (tipper, &sa) in self.sa.iter().enumerate() {
-            let d = correct(sa, dia, self.sia).map_err(|e| match e {
+        let mut da = [0u32; T];
+        for (tipper, (d, &sa)) in da.iter_mut().zip(self.static_list()).enumerate() {
+            *d = correct(sa, dia, self.sia).map_err(|e| match e {
                 CorrectionError::ZeroReference => TableError::ZeroReference,
                 _ => TableError::Overflow { tipper },
             })?;
-            // ok to ignore: da has the capacity of sa, which it never exceeds.
-            let _ = da.push(d);
         }
         Ok(da)
     }
 
-    pub(crate) fn commit(&mut self, dia: u32, da: Vec<u32, T>) {
+    fn static_list(&self) -> &[u32] {
+        self.sa.get(..self.len).unwrap_or(&[])
+    }
+
+    pub(crate) fn commit(&mut self, dia: u32, da: [u32; T]) {
         self.dia = dia;
         self.da = da;
     }
@@ -207,25 +226,25 @@ impl<const T: usize> DistanceTable<T> {
     /// Current (dynamic) distance from the reader to `tipper`, in pulses.
     #[must_use]
     pub fn distance(&self, tipper: usize) -> Option<u32> {
-        self.da.get(tipper).copied()
+        self.distances().get(tipper).copied()
     }
 
     /// Original (static) distance from the reader to `tipper`, in pulses.
     #[must_use]
     pub fn static_distance(&self, tipper: usize) -> Option<u32> {
-        self.sa.get(tipper).copied()
+        self.static_list().get(tipper).copied()
     }
 
     /// The dynamic list.
     #[must_use]
     pub fn distances(&self) -> &[u32] {
-        &self.da
+        self.da.get(..self.len).unwrap_or(&[])
     }
 
     /// Number of tippers.
     #[must_use]
-    pub fn tippers(&self) -> usize {
-        self.sa.len()
+    pub const fn tippers(&self) -> usize {
+        self.len
     }
 
     /// SIA: original pulses between the initiators.
@@ -342,7 +361,7 @@ mod tests {
             })
         );
         let mut t = DistanceTable::<2>::new(1, &[5, u32::MAX]).unwrap();
-        let before = t.clone();
+        let before = t;
         assert_eq!(t.recalibrate(2), Err(TableError::Overflow { tipper: 1 }));
         assert_eq!(t.recalibrate(0), Err(TableError::ZeroMeasurement));
         assert_eq!(t, before);

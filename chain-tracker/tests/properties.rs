@@ -135,7 +135,7 @@ proptest! {
         start in prop_oneof![prop::strategy::Just(0u32), any::<u32>(), prop::strategy::Just(u32::MAX - 50)],
     ) {
         let table: DistanceTable<T> = DistanceTable::new(SIA, &sa).unwrap();
-        let mut tracker: Tracker<u16, N, T> = Tracker::new(table.clone(), HOLD).unwrap();
+        let mut tracker: Tracker<u16, N, T> = Tracker::new(table, HOLD).unwrap();
         tracker.set_now(start);
         let mut model = CountDown { sa: sa.clone(), dia: SIA, entries: Vec::new(), held: vec![0; sa.len()] };
         let mut next_trolley = 0u16;
@@ -159,7 +159,7 @@ proptest! {
                 }
                 Op::PowerFailure => {
                     let snapshot = tracker.snapshot();
-                    let mut fresh: Tracker<u16, N, T> = Tracker::new(table.clone(), HOLD).unwrap();
+                    let mut fresh: Tracker<u16, N, T> = Tracker::new(table, HOLD).unwrap();
                     fresh.restore(&snapshot).unwrap();
                     prop_assert_eq!(fresh.snapshot(), snapshot);
                     tracker = fresh;

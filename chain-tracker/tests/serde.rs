@@ -7,7 +7,7 @@ use regler_chain_tracker::{DistanceTable, Snapshot, StretchConfig, StretchMeter,
 #[test]
 fn snapshot_round_trips_through_serde() {
     let table: DistanceTable<4> = DistanceTable::new(1000, &[10, 20, 30]).unwrap();
-    let mut before: Tracker<u16, 16, 4> = Tracker::new(table.clone(), 6).unwrap();
+    let mut before: Tracker<u16, 16, 4> = Tracker::new(table, 6).unwrap();
     for (trolley, tipper) in (100u16..).zip([2, 0, 1, 2]) {
         before.enter(trolley, tipper).unwrap();
         before.advance(3, |_| {});

@@ -256,7 +256,8 @@ impl<const W: usize> Forcing<W> {
 /// consecutive readings that differ from it (1 = no debounce; at most 15). A count changed while
 /// an input is counting applies to the readings already counted: lowered below them, the next
 /// differing reading changes the value. The counters are bit-sliced, four bit planes per word,
-/// so a cycle costs a few dozen word operations per 16 inputs, whatever the counts.
+/// so a cycle costs a few dozen word operations per 16 inputs, whatever the counts. A
+/// `Conditioning<W>` is 11 images of `W` words: `22·W` bytes.
 ///
 /// Deserializing checks that every point's debounce count is 1..=15: a stored count of 0 (a
 /// corrupt block) is an error, not an input that never debounces.
@@ -481,6 +482,11 @@ mod tests {
         f.unforce(3).unwrap();
         assert_eq!(f.forced(3), None);
         assert!(f.force(32, true).is_err());
+    }
+
+    #[test]
+    fn conditioning_is_eleven_images() {
+        assert_eq!(core::mem::size_of::<Conditioning<34>>(), 22 * 34);
     }
 
     #[test]

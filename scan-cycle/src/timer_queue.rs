@@ -74,8 +74,11 @@ struct Entry<A> {
 /// wheel (six levels of 64 slots): `insert`, `replace` and `remove` are O(1); a tick looks at one
 /// slot, and every 64ᵏ ticks moves one slot's entries a level down, so each entry is touched a
 /// bounded number of times (at most six) in its life: O(1) amortised per tick, whatever the
-/// number of timers. `N` entries fit; nothing is allocated. Memory: the slot table takes 3 KB
-/// (384 slots, head and tail each a `u32`) whatever `N`, plus about 20 bytes and an `A` per entry.
+/// number of timers. `N` entries fit; nothing is allocated. Memory: the slot table takes 3 KiB
+/// (384 slots, head and tail each a `u32`) whatever `N`, 16 bytes of counters, and per entry
+/// `size_of::<Option<A>>() + 22` bytes rounded up to a multiple of 8 (24 for `u8`, 32 for `u32`
+/// actions): `TimerQueue<u32, 4096>` is 134 KB, so [`new`](TimerQueue::new) is a `const fn` and
+/// such a queue belongs in a `static`. A unit test checks the formula.
 ///
 /// ```
 /// use regler_scan_cycle::TimerQueue;
@@ -456,6 +459,20 @@ mod tests {
         );
         assert_eq!(q.remove(last), None);
         assert_eq!(q.len(), 1);
+    }
+
+    #[test]
+    fn size_is_the_documented_formula() {
+        use core::mem::size_of;
+        // 3 KiB of slot heads and tails, 16 bytes of counters and the clock, and per entry the
+        // action, a u64 deadline and 3 u32 + a u16 of links (padded to the entry's alignment).
+        let entry = |action: usize| (action + 8 + 3 * 4 + 2).next_multiple_of(8);
+        assert_eq!(size_of::<Entry<u8>>(), entry(2)); // Option<u8> is 2 bytes
+        let table = 2 * 6 * 64 * 4;
+        let counters = 4 + size_of::<usize>() + 8;
+        let size = |entries: usize| (table + counters + entries).next_multiple_of(8);
+        assert_eq!(size_of::<TimerQueue<u8, 4096>>(), size(4096 * entry(2)));
+        assert_eq!(size_of::<TimerQueue<u32, 16>>(), size(16 * entry(8)));
     }
 
     #[test]

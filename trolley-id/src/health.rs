@@ -120,7 +120,9 @@ pub enum AlarmChange {
 /// and an alarm.
 ///
 /// Each passage costs O(1) whatever `W`; the window is a [`heapless::HistoryBuf`] of one byte per
-/// passage (`W` bytes and two words).
+/// passage: a `ReaderHealth<W>` is `W` bytes plus a `usize` and a flag for the window, two
+/// `HealthStats` (20 bytes each), the limits (12) and 8 bytes of alarm state, padded (a unit test
+/// checks it).
 ///
 /// ```
 /// use regler_trolley_id::{AlarmChange, AlarmLimits, encode, ReaderHealth, Strategy, TrolleyId, Voter};
@@ -265,6 +267,15 @@ impl fmt::Display for HealthStats {
 mod tests {
     use super::*;
     use crate::{NoRead, TrolleyId};
+
+    #[test]
+    fn size_is_the_documented_formula() {
+        use core::mem::size_of;
+        let window = |w: usize| (w + size_of::<usize>() + 1).next_multiple_of(size_of::<usize>());
+        let size = |w: usize| (window(w) + 2 * 20 + 12 + 8).next_multiple_of(size_of::<usize>());
+        assert_eq!(size_of::<ReaderHealth<1000>>(), size(1000));
+        assert_eq!(size_of::<ReaderHealth<7>>(), size(7));
+    }
 
     fn passage(no_read: bool, parity: u16, disagreement: bool) -> Passage {
         Passage {
