@@ -35,12 +35,13 @@ fn demonstration_controls_the_room_and_reports() {
     let r = json(&["--hours", "48"]);
     assert_eq!(r["faults"], "no fault");
     assert_eq!(r["commits_s"].as_array().unwrap().len(), 3);
-    assert!(r["alarms"].as_u64().unwrap() >= 1);
-    let settling = r["settling_time_s"].as_f64().expect("settles");
-    assert!(settling > 0.0 && settling < 3.0 * 3600.0, "{settling}");
-    assert!(r["overshoot_percent"].as_f64().unwrap() < 20.0);
+    // The run is deterministic: its figures are pinned (a change of controller, plant or
+    // script that moves them must say so here).
+    assert_eq!(r["alarms"].as_u64(), Some(4));
+    assert_eq!(r["settling_time_s"].as_f64(), Some(2760.0), "46 minutes");
+    assert_eq!(r["overshoot_percent"].as_f64(), Some(0.0));
     let iae = r["iae_unit_hours"].as_f64().unwrap();
-    assert!(iae.is_finite() && iae < 20.0, "{iae}");
+    assert!((iae - 5.204_091).abs() < 1e-5, "{iae}");
     // The keypad change at 4 h moved the set-point from 20 to 22 at the next sample.
     let trace = r["trace"].as_array().unwrap();
     let at = |h: f64| {

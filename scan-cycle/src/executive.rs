@@ -104,6 +104,47 @@ pub enum Breakpoint {
     OutputOff(usize),
 }
 
+/// What supervises a cycle from outside it: nothing ([`Executive::cycle`]) or [`Signals`]
+/// ([`Executive::cycle_with`]).
+trait Supervision<const IW: usize> {
+    fn halted(&self) -> Option<Halt>;
+    fn take_captured(&self) -> Option<[u16; IW]>;
+    fn write_unless_tripped(&self, write: impl FnOnce()) -> bool;
+    fn kick(&self, now_us: u32);
+}
+
+/// No supervision: the executive's own watchdog and flags only.
+struct Unsupervised;
+
+impl<const IW: usize> Supervision<IW> for Unsupervised {
+    fn halted(&self) -> Option<Halt> {
+        None
+    }
+    fn take_captured(&self) -> Option<[u16; IW]> {
+        None
+    }
+    fn write_unless_tripped(&self, write: impl FnOnce()) -> bool {
+        write();
+        true
+    }
+    fn kick(&self, _now_us: u32) {}
+}
+
+impl<const IW: usize, const OW: usize> Supervision<IW> for Signals<IW, OW> {
+    fn halted(&self) -> Option<Halt> {
+        Signals::halted(self)
+    }
+    fn take_captured(&self) -> Option<[u16; IW]> {
+        Some(Signals::take_captured(self))
+    }
+    fn write_unless_tripped(&self, write: impl FnOnce()) -> bool {
+        Signals::write_unless_tripped(self, write)
+    }
+    fn kick(&self, now_us: u32) {
+        Signals::kick(self, now_us);
+    }
+}
+
 /// Cycle statistics, as the source measured its load. Before the first cycle `min_us` is
 /// `u32::MAX` (no cycle yet), in [`CycleStats::NONE`], [`Default`] and a new executive alike.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -309,7 +350,7 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         io: &mut I,
         program: impl FnOnce(&mut Scan<'_, IW, OW>),
     ) -> Result<(), Halt> {
-        self.run_cycle(io, None, program)
+        self.run_cycle(io, &Unsupervised, program)
     }
 
     /// One cycle with `program`, supervised through `signals`, whose watchdog, latch capture and
@@ -325,23 +366,22 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         signals: &Signals<IW, OW>,
         program: impl FnOnce(&mut Scan<'_, IW, OW>),
     ) -> Result<(), Halt> {
-        self.run_cycle(io, Some(signals), program)
+        self.run_cycle(io, signals, program)
     }
 
-    fn run_cycle<I: Io<IW, OW>>(
+    /// The cycle, supervised by `signals` or by nothing: generic, so a firmware that never uses
+    /// [`Signals`] links no critical-section code and needs no critical-section implementation.
+    fn run_cycle<I: Io<IW, OW>, S: Supervision<IW>>(
         &mut self,
         io: &mut I,
-        signals: Option<&Signals<IW, OW>>,
+        signals: &S,
         program: impl FnOnce(&mut Scan<'_, IW, OW>),
     ) -> Result<(), Halt> {
-        if let Some(halt) = self.halted() {
+        if let Some(halt) = self.halted().or_else(|| signals.halted()) {
             return Err(halt);
         }
-        if let Some(signals) = signals {
-            if let Some(halt) = signals.halted() {
-                return Err(halt);
-            }
-            self.conditioning.capture(&signals.take_captured());
+        if let Some(captured) = signals.take_captured() {
+            self.conditioning.capture(&captured);
         }
         let start = io.now_us();
         if let Some(last) = self.last_start_us {
@@ -366,21 +406,14 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         });
         self.force_outputs.apply(&mut self.next);
         // Level A: all outputs out, images swapped.
-        match signals {
-            None => io.write_outputs(self.next.words()),
-            Some(signals) => {
-                let next = &self.next;
-                if !signals.write_unless_tripped(|| io.write_outputs(next.words())) {
-                    return Err(Halt::Watchdog);
-                }
-            }
+        let next = &self.next;
+        if !signals.write_unless_tripped(|| io.write_outputs(next.words())) {
+            return Err(Halt::Watchdog);
         }
         io.kick_watchdog();
         self.previous = self.next;
         let end = io.now_us();
-        if let Some(signals) = signals {
-            signals.kick(end);
-        }
+        signals.kick(end);
         self.last_end_us = Some(end);
         let busy = end.wrapping_sub(start);
         let s = &mut self.stats;
@@ -797,7 +830,6 @@ mod tests {
             assert!(s.inputs.get(0));
             assert!(!s.previous.get(0));
             s.outputs.set(0, true).unwrap();
-            io_is_not_here();
         })
         .unwrap();
         assert_eq!(io.outputs, [1]);
@@ -811,8 +843,6 @@ mod tests {
         assert_eq!(io.outputs, [0]);
         assert_eq!(plc.cycle_count(), 2);
     }
-
-    fn io_is_not_here() {}
 
     #[test]
     fn forced_values_win_over_program_and_hardware() {
