@@ -1,4 +1,4 @@
-//! The same as `pid_f32`, but with the configuration in `f64`: what the f64-only API used to cost (six numbers from flash or EEPROM,
+//! As `pid_f32`, but with the configuration in `f64` (what the f64-only API cost): a configuration read at run time (six numbers from flash or EEPROM,
 //! here volatile reads the compiler cannot fold) and updated from a measurement it cannot
 //! predict: what firmware on a Cortex-M4F pays for the controller.
 #![no_std]
@@ -7,6 +7,7 @@
 use core::ptr::{addr_of, read_volatile, write_volatile};
 
 use cortex_m_rt::entry;
+use regler_footprint::{finish, refused, stack};
 use regler_pid::{Config, Kind, Pid};
 
 /// Parameters as stored: K, Ti, Td, h, ymin, ymax.
@@ -15,7 +16,7 @@ static mut MEASUREMENT: f32 = 0.0;
 static mut OUTPUT: f32 = 0.0;
 
 fn stored(i: usize) -> f64 {
-    // SAFETY-free: a volatile read of a static, so the configuration is a run-time value.
+    // A volatile read of a static: the configuration is a run-time value.
     unsafe { read_volatile(addr_of!(STORED).cast::<f64>().add(i)) }
 }
 
@@ -29,9 +30,18 @@ fn main() -> ! {
     config.h = stored(3);
     config.ymin = stored(4);
     config.ymax = stored(5);
-    let Ok(mut pid) = Pid::<f32>::new(&config) else {
-        loop {}
+    let Ok(mut pid) = stack("Pid::<f32>::new from f64", || Pid::<f32>::new(&config)) else {
+        refused()
     };
+    // Measured three times (the first call may differ); only in the measuring build.
+    for _ in 0..if cfg!(feature = "measure") { 3 } else { 0 } {
+        let y = unsafe { read_volatile(addr_of!(MEASUREMENT)) };
+        let u = stack("Pid::<f32>::update (f64 config)", || pid.update(5.0, y));
+        unsafe { write_volatile(&raw mut OUTPUT, u) };
+    }
+    if cfg!(feature = "measure") {
+        finish();
+    }
     loop {
         let y = unsafe { read_volatile(addr_of!(MEASUREMENT)) };
         let u = pid.update(5.0, y);
@@ -41,5 +51,5 @@ fn main() -> ! {
 
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
-    loop {}
+    refused()
 }

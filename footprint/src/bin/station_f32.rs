@@ -6,6 +6,7 @@
 use core::ptr::{addr_of, read_volatile, write_volatile};
 
 use cortex_m_rt::entry;
+use regler_footprint::{finish, refused, stack};
 use regler_pid::{Code, Config, OperatorLimits, Parameters, Scaling, Station};
 
 /// Parameters as stored: K, Ti, set-point, RFEL, SCALEMIN, SCALEMAX.
@@ -24,10 +25,21 @@ fn main() -> ! {
     config.k = stored(0);
     config.ti = stored(1);
     let params = Parameters { config, setpoint: stored(2), rfel: stored(3), night_setback: 0.0 };
-    let Ok(scaling) = Scaling::new(stored(4), stored(5)) else { loop {} };
-    let Ok(mut station) = Station::<f32, f32>::new(params, scaling, OperatorLimits::default()) else {
-        loop {}
+    let Ok(scaling) = Scaling::new(stored(4), stored(5)) else { refused() };
+    let new = || Station::<f32, f32>::new(params, scaling, OperatorLimits::default());
+    let Ok(mut station) = stack("Station::<f32, f32>::new", new) else {
+        refused()
     };
+    // Measured three times (the first call may differ); only in the measuring build.
+    for _ in 0..if cfg!(feature = "measure") { 3 } else { 0 } {
+        let y = stack("Station::<f32, f32>::sample", || {
+            station.sample(unsafe { read_volatile(addr_of!(MEASUREMENT)) })
+        });
+        unsafe { write_volatile(&raw mut OUTPUT, y) };
+    }
+    if cfg!(feature = "measure") {
+        finish();
+    }
     loop {
         // The operator keys a new set-point now and then; the sample applies it.
         let keyed = unsafe { read_volatile(addr_of!(KEYED)) };
@@ -41,5 +53,5 @@ fn main() -> ! {
 
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
-    loop {}
+    refused()
 }

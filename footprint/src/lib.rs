@@ -1,0 +1,86 @@
+//! What every footprint firmware shares: measuring the stack a call uses (feature `measure`,
+//! under QEMU), or nothing at all (the build whose flash is measured).
+#![no_std]
+
+/// Runs `f` and returns its result; with the feature `measure`, also prints how many bytes of
+/// stack `f` used at its deepest, as `stack <name> <bytes>`.
+///
+/// The stack below the caller is painted afresh first (cortex-m-rt paints it once at reset, but
+/// an earlier call may have scrubbed it), then the lowest word no longer painted marks the depth.
+/// Without the feature it is `f()`, inlined like any call the firmware makes.
+#[inline(always)]
+pub fn stack<R>(name: &str, f: impl FnOnce() -> R) -> R {
+    #[cfg(feature = "measure")]
+    {
+        measure::stack(name, f)
+    }
+    #[cfg(not(feature = "measure"))]
+    {
+        let _ = name;
+        f()
+    }
+}
+
+/// The end of a firmware: exits QEMU when measuring, else loops for ever.
+pub fn finish() -> ! {
+    #[cfg(feature = "measure")]
+    cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_SUCCESS);
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+/// Stops the firmware when its configuration is refused (it never is: the stored values are
+/// valid); an exit with failure when measuring.
+pub fn refused() -> ! {
+    #[cfg(feature = "measure")]
+    {
+        cortex_m_semihosting::hprintln!("configuration refused");
+        cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
+    }
+    loop {
+        cortex_m::asm::nop();
+    }
+}
+
+#[cfg(feature = "measure")]
+mod measure {
+    // The stack is raw memory between two linker symbols: reading and repainting it needs raw
+    // pointers. This is measuring firmware, not a library; nothing else here is unsafe.
+    unsafe extern "C" {
+        static _stack_end: u32;
+    }
+
+    const PAINT: u32 = 0xcccc_cccc;
+    /// Words left unpainted just below this function's stack pointer, for anything it pushes
+    /// itself before the call; a figure below 16 bytes reads as 16.
+    const MARGIN_WORDS: usize = 4;
+
+    /// The measured call in a frame of its own: inlined into `stack`, its locals would sit in
+    /// `stack`'s frame, above the stack pointer read there, and go unseen.
+    #[inline(never)]
+    fn call<R>(f: impl FnOnce() -> R) -> R {
+        f()
+    }
+
+    #[inline(never)]
+    pub(crate) fn stack<R>(name: &str, f: impl FnOnce() -> R) -> R {
+        let bottom = core::ptr::addr_of!(_stack_end) as usize;
+        let sp = cortex_m::register::msp::read() as usize;
+        let top = sp - MARGIN_WORDS * 4;
+        let mut p = bottom;
+        while p < top {
+            unsafe { core::ptr::write_volatile(p as *mut u32, PAINT) };
+            p += 4;
+        }
+        let result = call(f);
+        let mut lowest = bottom;
+        while lowest < top && unsafe { core::ptr::read_volatile(lowest as *const u32) } == PAINT {
+            lowest += 4;
+        }
+        // Depth below the caller's stack pointer; the margin is counted as used only if touched.
+        let used = sp.saturating_sub(lowest);
+        cortex_m_semihosting::hprintln!("stack {} {}", name, used);
+        result
+    }
+}
