@@ -1,0 +1,101 @@
+//! Instructions per operation on the Cortex-M4F: each hot path runs N times, then 2N times,
+//! between calls of `marker`; `on-target/cycles` runs this single-stepped under QEMU, counts the
+//! instructions between markers and reports (count(2N) − count(N)) / N, which cancels the set-up
+//! and leaves the operation and its loop.
+#![no_std]
+#![no_main]
+
+use core::hint::black_box;
+
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use panic_semihosting as _;
+use regler_chain_tracker::{DistanceTable, Tracker};
+use regler_pid::{Config, Kind, Pid};
+use regler_scan_cycle::TimerQueue;
+use regler_trolley_id::decode;
+
+const N: u32 = 200;
+
+/// Where the trace is cut; `on-target/cycles` finds its address with `llvm-nm`.
+#[unsafe(no_mangle)]
+#[inline(never)]
+pub extern "C" fn regler_marker(phase: u32) {
+    black_box(phase);
+}
+
+fn twice(name: &str, mut op: impl FnMut()) {
+    hprintln!("op {}", name);
+    regler_marker(0);
+    for _ in 0..N {
+        op();
+    }
+    regler_marker(1);
+    for _ in 0..2 * N {
+        op();
+    }
+    regler_marker(2);
+}
+
+#[entry]
+fn main() -> ! {
+    hprintln!("n {}", N);
+    // The benches' loop: a controller with everything on and a first-order plant.
+    let mut c = Config::<f32>::default();
+    c.kind = Kind::PID;
+    c.k = black_box(2.0);
+    c.ti = black_box(1.0);
+    c.td = black_box(0.2);
+    c.n = 10.0;
+    c.tt = Some(0.05);
+    c.h = 0.01;
+    c.ymin = -5.0;
+    c.ymax = 5.0;
+    c.dymax = Some(0.5);
+    let Ok(mut regler) = Pid::<f32>::new(&c) else { debug::exit(debug::EXIT_FAILURE); loop {} };
+    let mut y = 0.0f32;
+    twice("regler Pid<f32>::update + plant", || {
+        let u = regler.update(1.0, black_box(y));
+        y += 0.05 * (u - y);
+    });
+    let mut anchor = pid::Pid::new(1.0f32, 5.0);
+    anchor.p(black_box(2.0f32), 100.0).i(0.02, 5.0).d(40.0, 100.0);
+    let mut y = 0.0f32;
+    twice("pid crate Pid<f32>::next_control_output + plant", || {
+        let u = anchor.next_control_output(black_box(y)).output;
+        y += 0.05 * (u - y);
+    });
+    let mut queue: TimerQueue<u16, 256> = TimerQueue::new();
+    for n in 0..256u16 {
+        let _ = queue.insert(u32::from(n) + 1, n);
+    }
+    twice("TimerQueue<u16, 256>::tick, one expiry re-armed per tick", || {
+        let mut fired = None;
+        queue.tick(|a| fired = Some(a));
+        if let Some(a) = fired {
+            let _ = queue.insert(256, a);
+        }
+    });
+    let Ok(table) = DistanceTable::<8>::new(1000, &[100, 200, 300, 400, 500, 600, 700, 800]) else {
+        debug::exit(debug::EXIT_FAILURE);
+        loop {}
+    };
+    let Ok(mut tracker) = Tracker::<u16, 256, 8>::new(table, 6) else { debug::exit(debug::EXIT_FAILURE); loop {} };
+    let mut k = 0u32;
+    twice("Tracker<u16, 256, 8>::pulse, a trolley entering every 4 pulses", || {
+        if k % 4 == 0 {
+            let _ = tracker.enter(k as u16, (k % 8) as usize);
+        }
+        tracker.pulse(|e| {
+            black_box(e);
+        });
+        k = k.wrapping_add(1);
+    });
+    let mut word = 0u16;
+    twice("decode", || {
+        black_box(decode(black_box(word)).is_ok());
+        word = word.wrapping_add(1) & 0x1FFF;
+    });
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {}
+}
