@@ -1,8 +1,8 @@
 //! regler-chain-tracker on the core: the 64-bit intermediate of the correction on a 32-bit core.
 
 use regler_chain_tracker::{
-    DistanceTable, HeldTipper, Measurement, Snapshot, StretchConfig, StretchMeter, TipperEvent,
-    Tracker, TrackerError, correct,
+    DistanceTable, EnterError, HeldTipper, Measurement, Snapshot, StretchConfig, StretchMeter,
+    TipperEvent, Tracker, TrackerError, correct,
 };
 
 use crate::{Outcome, check};
@@ -30,7 +30,19 @@ pub fn tracker_with_recalibration() -> Outcome {
             let _ = events.push((now, e));
         });
     }
-    check!(events.as_slice() == [(28, TipperEvent::Set { tipper: 2, trolley: 1977 }), (34, TipperEvent::Reset { tipper: 2 })]);
+    check!(
+        events.as_slice()
+            == [
+                (
+                    28,
+                    TipperEvent::Set {
+                        tipper: 2,
+                        trolley: 1977
+                    }
+                ),
+                (34, TipperEvent::Reset { tipper: 2 })
+            ]
+    );
     Ok(())
 }
 
@@ -55,8 +67,16 @@ pub fn snapshot_restore_and_refusal() -> Outcome {
     // A held tipper beyond this tracker's hold is refused and changes nothing.
     let mut bad = stored.clone();
     bad.held.clear();
-    bad.held.push(HeldTipper { tipper: 0, remaining: 20 }).map_err(|_| "push")?;
-    check!(matches!(b.restore(&bad), Err(TrackerError::HeldTooLong { .. })));
+    bad.held
+        .push(HeldTipper {
+            tipper: 0,
+            remaining: 20,
+        })
+        .map_err(|_| "push")?;
+    check!(matches!(
+        b.restore(&bad),
+        Err(TrackerError::HeldTooLong { .. })
+    ));
     check!(b.is_empty());
     Ok(())
 }
@@ -74,5 +94,16 @@ pub fn sizes_on_a_32_bit_core() -> Outcome {
     use core::mem::size_of;
     check!(size_of::<DistanceTable<40>>() == 8 * 40 + 8 + 4);
     check!(size_of::<Tracker<u16, 512, 40>>() == 7468);
+    Ok(())
+}
+
+pub fn a_full_chain_hands_the_trolley_back() -> Outcome {
+    let table: DistanceTable<2> = DistanceTable::new(1000, &[50, 60]).map_err(|_| "table")?;
+    let mut t: Tracker<u16, 2, 2> = Tracker::new(table, 6).map_err(|_| "tracker")?;
+    t.enter(1, 0).map_err(|_| "enter")?;
+    t.enter(2, 1).map_err(|_| "enter")?;
+    check!(matches!(t.enter(3, 0), Err(EnterError::Full(3))));
+    check!(matches!(t.enter(4, 9), Err(e) if e.into_trolley() == 4));
+    check!(t.len() == 2);
     Ok(())
 }

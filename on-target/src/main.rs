@@ -34,31 +34,104 @@ macro_rules! check {
 }
 
 const TESTS: &[(&str, fn() -> Outcome)] = &[
-    ("pid::f32_closed_loop_survives_nan_at_power_up", pid::f32_closed_loop_survives_nan_at_power_up),
-    ("pid::f64_matches_hand_computed_steps", pid::f64_matches_hand_computed_steps),
+    (
+        "pid::f32_closed_loop_survives_nan_at_power_up",
+        pid::f32_closed_loop_survives_nan_at_power_up,
+    ),
+    (
+        "pid::f64_matches_hand_computed_steps",
+        pid::f64_matches_hand_computed_steps,
+    ),
     ("pid::fixed_point_follows_f32", pid::fixed_point_follows_f32),
-    ("pid::config_errors_name_the_parameter", pid::config_errors_name_the_parameter),
+    (
+        "pid::config_errors_name_the_parameter",
+        pid::config_errors_name_the_parameter,
+    ),
     ("pid::spike_is_forgotten", pid::spike_is_forgotten),
-    ("pid::station_commits_at_a_sample_in_f32", pid::station_commits_at_a_sample_in_f32),
-    ("pid::alarm_blinks_then_steady", pid::alarm_blinks_then_steady),
-    ("pid::scaling_round_trips_every_count", pid::scaling_round_trips_every_count),
+    (
+        "pid::station_commits_at_a_sample_in_f32",
+        pid::station_commits_at_a_sample_in_f32,
+    ),
+    (
+        "pid::alarm_blinks_then_steady",
+        pid::alarm_blinks_then_steady,
+    ),
+    (
+        "pid::scaling_round_trips_every_count",
+        pid::scaling_round_trips_every_count,
+    ),
     ("pid::sizes_on_a_32_bit_core", pid::sizes_on_a_32_bit_core),
-    ("scan::iec_timers_and_pt_changes", scan::iec_timers_and_pt_changes),
-    ("scan::counters_edges_bistables", scan::counters_edges_bistables),
-    ("scan::timer_queue_across_wheel_levels", scan::timer_queue_across_wheel_levels),
-    ("scan::executive_with_debounce_and_forcing", scan::executive_with_debounce_and_forcing),
-    ("scan::signals_trip_inside_a_cycle", scan::signals_trip_inside_a_cycle),
-    ("scan::calendar_and_minute_table", scan::calendar_and_minute_table),
+    (
+        "pid::manual_tracking_and_feedforward",
+        pid::manual_tracking_and_feedforward,
+    ),
+    (
+        "pid::staged_edits_say_what_was_wrong",
+        pid::staged_edits_say_what_was_wrong,
+    ),
+    (
+        "scan::iec_timers_and_pt_changes",
+        scan::iec_timers_and_pt_changes,
+    ),
+    (
+        "scan::counters_edges_bistables",
+        scan::counters_edges_bistables,
+    ),
+    (
+        "scan::timer_queue_across_wheel_levels",
+        scan::timer_queue_across_wheel_levels,
+    ),
+    (
+        "scan::executive_with_debounce_and_forcing",
+        scan::executive_with_debounce_and_forcing,
+    ),
+    (
+        "scan::signals_trip_inside_a_cycle",
+        scan::signals_trip_inside_a_cycle,
+    ),
+    (
+        "scan::calendar_and_minute_table",
+        scan::calendar_and_minute_table,
+    ),
     ("scan::sizes_on_a_32_bit_core", scan::sizes_on_a_32_bit_core),
-    ("trolley::decode_all_8192_words", trolley::decode_all_8192_words),
-    ("trolley::voters_never_invent_a_trolley", trolley::voters_never_invent_a_trolley),
+    (
+        "scan::step_chain_spool_and_breakpoints",
+        scan::step_chain_spool_and_breakpoints,
+    ),
+    (
+        "trolley::decode_all_8192_words",
+        trolley::decode_all_8192_words,
+    ),
+    (
+        "trolley::voters_never_invent_a_trolley",
+        trolley::voters_never_invent_a_trolley,
+    ),
     ("trolley::registry_routes", trolley::registry_routes),
     ("trolley::reader_health_alarm", trolley::reader_health_alarm),
-    ("chain::correct_is_exact_at_the_extremes", chain::correct_is_exact_at_the_extremes),
-    ("chain::tracker_with_recalibration", chain::tracker_with_recalibration),
-    ("chain::snapshot_restore_and_refusal", chain::snapshot_restore_and_refusal),
-    ("chain::stretch_meter_confirms", chain::stretch_meter_confirms),
-    ("chain::sizes_on_a_32_bit_core", chain::sizes_on_a_32_bit_core),
+    (
+        "chain::correct_is_exact_at_the_extremes",
+        chain::correct_is_exact_at_the_extremes,
+    ),
+    (
+        "chain::tracker_with_recalibration",
+        chain::tracker_with_recalibration,
+    ),
+    (
+        "chain::snapshot_restore_and_refusal",
+        chain::snapshot_restore_and_refusal,
+    ),
+    (
+        "chain::stretch_meter_confirms",
+        chain::stretch_meter_confirms,
+    ),
+    (
+        "chain::sizes_on_a_32_bit_core",
+        chain::sizes_on_a_32_bit_core,
+    ),
+    (
+        "chain::a_full_chain_hands_the_trolley_back",
+        chain::a_full_chain_hands_the_trolley_back,
+    ),
 ];
 
 #[entry]

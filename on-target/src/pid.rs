@@ -2,8 +2,8 @@
 
 use fixed::types::I16F16;
 use regler_pid::{
-    Alarm, AlarmState, Code, Config, ConfigError, Kind, OperatorLimits, Parameter, Parameters, Pid,
-    Scaling, Station,
+    Alarm, AlarmState, Code, Config, ConfigError, EditError, Inputs, Kind, Mode, OperatorLimits,
+    Parameter, Parameters, Pid, Scaling, Staged, Station, ValueError,
 };
 
 use crate::{Outcome, check};
@@ -36,7 +36,15 @@ pub fn f32_closed_loop_survives_nan_at_power_up() -> Outcome {
 }
 
 pub fn f64_matches_hand_computed_steps() -> Outcome {
-    let c = Config { kind: Kind::PI, k: 2.0, ti: 4.0, h: 1.0, ymin: -10.0, ymax: 10.0, ..Config::default() };
+    let c = Config {
+        kind: Kind::PI,
+        k: 2.0,
+        ti: 4.0,
+        h: 1.0,
+        ymin: -10.0,
+        ymax: 10.0,
+        ..Config::default()
+    };
     let mut pid = Pid::<f64>::new(&c).map_err(|_| "config")?;
     check!(pid.update(1.0, 0.0) == 2.0);
     check!(pid.integral() == 0.5);
@@ -46,13 +54,24 @@ pub fn f64_matches_hand_computed_steps() -> Outcome {
 }
 
 pub fn fixed_point_follows_f32() -> Outcome {
-    let c = Config { kind: Kind::PID, k: 1.5, ti: 6.0, td: 1.0, h: 0.5, ymax: 10.0, dymax: Some(1.0), ..Config::default() };
+    let c = Config {
+        kind: Kind::PID,
+        k: 1.5,
+        ti: 6.0,
+        td: 1.0,
+        h: 0.5,
+        ymax: 10.0,
+        dymax: Some(1.0),
+        ..Config::default()
+    };
     let mut a = Pid::<f32>::new(&c).map_err(|_| "f32")?;
     let mut b = Pid::<I16F16>::new(&c).map_err(|_| "I16F16")?;
     let mut y = 0.0f32;
     for _ in 0..300 {
         let ua = a.update(5.0, y);
-        let ub = b.update(I16F16::from_num(5.0), I16F16::from_num(y)).to_num::<f32>();
+        let ub = b
+            .update(I16F16::from_num(5.0), I16F16::from_num(y))
+            .to_num::<f32>();
         check!((ua - ub).abs() < 0.05);
         y += 0.25 * (0.8 * ua - y);
     }
@@ -65,7 +84,10 @@ pub fn fixed_point_follows_f32() -> Outcome {
 pub fn config_errors_name_the_parameter() -> Outcome {
     let mut c = room();
     c.tt = Some(0.1);
-    check!(matches!(c.validate(), Err(ConfigError::TrackingUnstable { .. })));
+    check!(matches!(
+        c.validate(),
+        Err(ConfigError::TrackingUnstable { .. })
+    ));
     let mut c = room();
     c.k = 1e-30;
     c.ti = 1e10;
@@ -74,9 +96,20 @@ pub fn config_errors_name_the_parameter() -> Outcome {
 }
 
 pub fn spike_is_forgotten() -> Outcome {
-    let c = Config { kind: Kind::PID, k: 0.5, ti: 10.0, td: 1.0, h: 0.5, tt: Some(5.0), ymax: 10.0, ..Config::default() };
+    let c = Config {
+        kind: Kind::PID,
+        k: 0.5,
+        ti: 10.0,
+        td: 1.0,
+        h: 0.5,
+        tt: Some(5.0),
+        ymax: 10.0,
+        ..Config::default()
+    };
     let run = |spike: bool| -> f32 {
-        let Ok(mut pid) = Pid::<f32>::new(&c) else { return f32::NAN };
+        let Ok(mut pid) = Pid::<f32>::new(&c) else {
+            return f32::NAN;
+        };
         let mut y = 0.0f32;
         for k in 0..2000 {
             let reading = if spike && k == 1000 { 1e30 } else { y };
@@ -90,9 +123,15 @@ pub fn spike_is_forgotten() -> Outcome {
 }
 
 pub fn station_commits_at_a_sample_in_f32() -> Outcome {
-    let params = Parameters { config: Config::<f32>::default(), setpoint: 20.0, rfel: 2.0, night_setback: 0.0 };
+    let params = Parameters {
+        config: Config::<f32>::default(),
+        setpoint: 20.0,
+        rfel: 2.0,
+        night_setback: 0.0,
+    };
     let scale = Scaling::new(0.0f32, 40.0).map_err(|_| "scale")?;
-    let mut st = Station::<f32, f32>::new(params, scale, OperatorLimits::default()).map_err(|_| "station")?;
+    let mut st = Station::<f32, f32>::new(params, scale, OperatorLimits::default())
+        .map_err(|_| "station")?;
     check!(st.sample(15.0) > 0.0);
     check!(st.alarm_state() == AlarmState::Blinking);
     st.staged_mut().edit(Code::Win, 18.0).map_err(|_| "edit")?;
@@ -133,5 +172,69 @@ pub fn scaling_round_trips_every_count() -> Outcome {
 pub fn sizes_on_a_32_bit_core() -> Outcome {
     check!(core::mem::size_of::<Pid<f32>>() == 84);
     check!(core::mem::size_of::<Pid<I16F16>>() == 84);
+    Ok(())
+}
+
+pub fn manual_tracking_and_feedforward() -> Outcome {
+    let c = Config {
+        kind: Kind::PI,
+        k: 2.0,
+        ti: 4.0,
+        h: 1.0,
+        ymin: -10.0,
+        ymax: 10.0,
+        ..Config::default()
+    };
+    let mut pid = Pid::<f32>::new(&c).map_err(|_| "config")?;
+    pid.update(5.0, 4.0);
+    pid.set_manual(7.5).map_err(|_| "manual")?;
+    check!(pid.mode() == Mode::Manual);
+    check!(pid.update(5.0, 4.5) == 7.5);
+    check!(pid.set_manual(f32::NAN) == Err(ValueError::NotFinite));
+    pid.set_auto();
+    check!((pid.update(5.0, 4.5) - 7.5).abs() < 1e-5);
+    let mut free = Pid::<f32>::new(&c).map_err(|_| "config")?;
+    check!(
+        free.update_with(
+            0.0,
+            0.0,
+            Inputs {
+                feedforward: 3.0,
+                track: None
+            }
+        ) == 3.0
+    );
+    check!(
+        free.update_with(
+            0.0,
+            0.0,
+            Inputs {
+                feedforward: f32::NAN,
+                track: None
+            }
+        ) == 3.0
+    );
+    check!(free.faults().non_finite_input());
+    Ok(())
+}
+
+pub fn staged_edits_say_what_was_wrong() -> Outcome {
+    let active = Parameters {
+        config: Config::<f32>::default(),
+        setpoint: 50.0,
+        rfel: 5.0,
+        night_setback: 0.0,
+    };
+    let scale = Scaling::new(0.0f32, 100.0).map_err(|_| "scale")?;
+    let mut staged = Staged::new(active, scale, OperatorLimits::default()).map_err(|_| "staged")?;
+    check!(staged.edit_number(42, 1.0) == Err(EditError::UnknownCode(42)));
+    check!(matches!(
+        staged.edit(Code::Kp, 1e6),
+        Err(EditError::IllegalValue { code: Code::Kp, .. })
+    ));
+    check!(matches!(staged.edit(Code::Ti, 0.0), Err(e) if e.code() == Some(Code::Ti)));
+    staged.edit(Code::Dymax, 0.0).map_err(|_| "dymax")?;
+    check!(staged.shadow().config.dymax.is_none());
+    check!(!staged.edited());
     Ok(())
 }

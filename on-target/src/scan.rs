@@ -1,8 +1,9 @@
 //! regler-scan-cycle on the core: 32-bit usize in the wheel, the critical section of a real core.
 
 use regler_scan_cycle::{
-    Conditioning, Ctd, Ctu, Ctud, CycleConfig, DateTime, Executive, FTrig, Halt, Io, MinuteTable,
-    RTrig, Rs, Signals, Sr, Start, TimerQueue, Tof, Ton, Tp, Weekdays,
+    Breakpoint, Conditioning, Ctd, Ctu, Ctud, CycleConfig, DateTime, Executive, FTrig, Halt, Io,
+    MinuteTable, RTrig, Rs, Signals, Spool, Sr, Start, StepChain, TimerQueue, Tof, Ton, Tp,
+    Weekdays,
 };
 
 use crate::{Outcome, check};
@@ -60,7 +61,8 @@ pub fn timer_queue_across_wheel_levels() -> Outcome {
     let ticks = [1u32, 63, 64, 65, 4095, 4097, 262_150, 100];
     let mut ids = heapless::Vec::<_, 8>::new();
     for (n, &t) in ticks.iter().enumerate() {
-        ids.push(q.insert(t, n as u8).map_err(|_| "full")?).map_err(|_| "vec")?;
+        ids.push(q.insert(t, n as u8).map_err(|_| "full")?)
+            .map_err(|_| "vec")?;
     }
     // Replace one, remove one: the stale handle must never touch a newer timer.
     q.replace(ids[7], 2).map_err(|_| "replace")?;
@@ -72,7 +74,18 @@ pub fn timer_queue_across_wheel_levels() -> Outcome {
             let _ = fired.push((now, a));
         });
     }
-    check!(fired.as_slice() == [(1, 0), (2, 7), (63, 1), (64, 2), (65, 3), (4097, 5), (262_150, 6)]);
+    check!(
+        fired.as_slice()
+            == [
+                (1, 0),
+                (2, 7),
+                (63, 1),
+                (64, 2),
+                (65, 3),
+                (4097, 5),
+                (262_150, 6)
+            ]
+    );
     check!(q.len() == 0);
     Ok(())
 }
@@ -98,9 +111,15 @@ impl Io<2, 1> for Bench {
 }
 
 pub fn executive_with_debounce_and_forcing() -> Outcome {
-    let mut plant = Bench { inputs: [0; 2], outputs: [0], t: 0 };
+    let mut plant = Bench {
+        inputs: [0; 2],
+        outputs: [0],
+        t: 0,
+    };
     let mut plc: Executive<2, 1> = Executive::new(CycleConfig::source());
-    plc.conditioning_mut().set_debounce(0, 3).map_err(|_| "debounce")?;
+    plc.conditioning_mut()
+        .set_debounce(0, 3)
+        .map_err(|_| "debounce")?;
     plc.force_output(5, true).map_err(|_| "force")?;
     plant.inputs = [1, 0];
     let mut seen = [false; 4];
@@ -122,12 +141,19 @@ pub fn executive_with_debounce_and_forcing() -> Outcome {
 pub fn signals_trip_inside_a_cycle() -> Outcome {
     // A static, as firmware has it, with the core's real critical section (interrupts masked).
     static SIGNALS: Signals<2, 1> = Signals::new(&CycleConfig::source());
-    let mut plant = Bench { inputs: [0; 2], outputs: [0], t: 0 };
+    let mut plant = Bench {
+        inputs: [0; 2],
+        outputs: [0],
+        t: 0,
+    };
     let mut plc: Executive<2, 1> = Executive::new(CycleConfig::source());
-    plc.conditioning_mut().set_latched(3, true).map_err(|_| "latch")?;
+    plc.conditioning_mut()
+        .set_latched(3, true)
+        .map_err(|_| "latch")?;
     SIGNALS.capture(&[1 << 3, 0]);
     let mut latched = false;
-    plc.cycle_with(&mut plant, &SIGNALS, |s| latched = s.inputs.get(3)).map_err(|_| "cycle")?;
+    plc.cycle_with(&mut plant, &SIGNALS, |s| latched = s.inputs.get(3))
+        .map_err(|_| "cycle")?;
     check!(latched);
     let r = plc.cycle_with(&mut plant, &SIGNALS, |s| {
         let _ = SIGNALS.check_watchdog(10_000_000); // the timer interrupt, 10 s later
@@ -146,7 +172,14 @@ pub fn signals_trip_inside_a_cycle() -> Outcome {
 pub fn calendar_and_minute_table() -> Outcome {
     let mut clock = DateTime::new(2026, 11, 23, 5, 59, 30).map_err(|_| "date")?;
     let mut table: MinuteTable<u8, 4> = MinuteTable::new();
-    table.add(Start { hour: 6, minute: 0, days: Weekdays::WORKDAYS, program: 1 }).map_err(|_| "add")?;
+    table
+        .add(Start {
+            hour: 6,
+            minute: 0,
+            days: Weekdays::WORKDAYS,
+            program: 1,
+        })
+        .map_err(|_| "add")?;
     check!(clock.advance(30_000) == 1);
     check!(table.due(&clock).next() == Some(&1));
     check!(clock.weekday() == 1);
@@ -162,5 +195,55 @@ pub fn sizes_on_a_32_bit_core() -> Outcome {
     check!(size_of::<Conditioning<34>>() == 22 * 34);
     // 3 KiB of wheel, 16 bytes of counters, 24 bytes per entry for a one-byte action.
     check!(size_of::<TimerQueue<u8, 64>>() == 3072 + 16 + 64 * 24);
+    Ok(())
+}
+
+pub fn step_chain_spool_and_breakpoints() -> Outcome {
+    struct Counts {
+        seen: u32,
+    }
+    let mut chain: StepChain<Counts, 2, 1, 4> = StepChain::new();
+    chain
+        .push(
+            |s| s.inputs.get(0),
+            |s, c| {
+                c.seen += 1;
+                let _ = s.outputs.set(2, s.cycle % 10 < 3);
+            },
+        )
+        .map_err(|_| "push")?;
+    let mut plant = Bench {
+        inputs: [1, 0],
+        outputs: [0],
+        t: 0,
+    };
+    let mut plc: Executive<2, 1> = Executive::new(CycleConfig::source());
+    let mut counts = Counts { seen: 0 };
+    // The monitor: run until output 2 comes on, then cont to its next rising edge.
+    let on = [Breakpoint::OutputOn(2)];
+    let (n1, why) = plc.run(
+        &mut plant,
+        100,
+        &on,
+        |s| chain.run(s, &mut counts),
+        |_, _| {},
+    );
+    check!(why == Some(Halt::Breakpoint(Breakpoint::OutputOn(2))));
+    let (n2, _) = plc.run(
+        &mut plant,
+        100,
+        &on,
+        |s| chain.run(s, &mut counts),
+        |_, _| {},
+    );
+    check!(n1 == 1 && n2 == 9); // on in cycles 1-2 and 10-12: the next edge is cycle 10
+    check!(counts.seen == 10);
+    // Level C: jobs in the reserve after a cycle; a full spool hands the job back.
+    let mut spool: Spool<u8, 2> = Spool::new();
+    check!(spool.push(1).is_ok() && spool.push(2).is_ok() && spool.push(3) == Err(3));
+    let mut done = 0u8;
+    plc.cycle(&mut plant, |_| {}).map_err(|_| "cycle")?;
+    plc.reserve(&mut plant, &mut spool, 0, |j| done += j);
+    check!(done == 3 && spool.is_empty());
     Ok(())
 }

@@ -30,12 +30,17 @@ pub fn voters_never_invent_a_trolley() -> Outcome {
     let id = |n| TrolleyId::new(n).ok_or("id");
     let reads = [encode(id(51)?), encode(id(15)?), encode(id(60)?)];
     let mut majority = Voter::new(Strategy::Majority { min_samples: 3 }).map_err(|_| "voter")?;
-    check!(majority.vote(&reads).verdict == Verdict::NoRead(NoRead::Unsupported { majority: id(63)? }));
+    check!(
+        majority.vote(&reads).verdict == Verdict::NoRead(NoRead::Unsupported { majority: id(63)? })
+    );
     let a = encode(id(1234)?);
     check!(majority.vote(&[a, a ^ 0b11, a, 0]).verdict == Verdict::Identified(id(1234)?));
     let mut consecutive = Voter::new(Strategy::Consecutive { k: 2 }).map_err(|_| "voter")?;
     check!(consecutive.vote(&[a, a]).verdict == Verdict::Identified(id(1234)?));
-    check!(matches!(consecutive.vote(&reads).verdict, Verdict::NoRead(_)));
+    check!(matches!(
+        consecutive.vote(&reads).verdict,
+        Verdict::NoRead(_)
+    ));
     Ok(())
 }
 
@@ -44,16 +49,32 @@ pub fn registry_routes() -> Outcome {
     let mut reg: Registry<bool> = Registry::new();
     let t = TrolleyId::new(77).ok_or("id")?;
     reg.assign(t, true);
-    check!(matches!(reg.route(&Verdict::Identified(t), |d| *d), Route::Deliver { destination: true, .. }));
-    check!(matches!(reg.route(&Verdict::Identified(t), |d| !*d), Route::Reject(_)));
+    check!(matches!(
+        reg.route(&Verdict::Identified(t), |d| *d),
+        Route::Deliver {
+            destination: true,
+            ..
+        }
+    ));
+    check!(matches!(
+        reg.route(&Verdict::Identified(t), |d| !*d),
+        Route::Reject(_)
+    ));
     let other = TrolleyId::new(78).ok_or("id")?;
-    check!(matches!(reg.route(&Verdict::Identified(other), |_| true), Route::Reject(_)));
+    check!(matches!(
+        reg.route(&Verdict::Identified(other), |_| true),
+        Route::Reject(_)
+    ));
     check!(reg.len() == 1);
     Ok(())
 }
 
 pub fn reader_health_alarm() -> Outcome {
-    let limits = AlarmLimits { no_read_per_mille: 100, disagreement_per_mille: 1000, min_passages: 10 };
+    let limits = AlarmLimits {
+        no_read_per_mille: 100,
+        disagreement_per_mille: 1000,
+        min_passages: 10,
+    };
     let mut health: ReaderHealth<50> = ReaderHealth::new(limits);
     let mut voter = Voter::new(Strategy::Consecutive { k: 2 }).map_err(|_| "voter")?;
     let good = encode(TrolleyId::new(7).ok_or("id")?);

@@ -52,14 +52,20 @@ fn main() -> ! {
     c.ymin = -5.0;
     c.ymax = 5.0;
     c.dymax = Some(0.5);
-    let Ok(mut regler) = Pid::<f32>::new(&c) else { debug::exit(debug::EXIT_FAILURE); loop {} };
+    let Ok(mut regler) = Pid::<f32>::new(&c) else {
+        debug::exit(debug::EXIT_FAILURE);
+        loop {}
+    };
     let mut y = 0.0f32;
     twice("regler Pid<f32>::update + plant", || {
         let u = regler.update(1.0, black_box(y));
         y += 0.05 * (u - y);
     });
     let mut anchor = pid::Pid::new(1.0f32, 5.0);
-    anchor.p(black_box(2.0f32), 100.0).i(0.02, 5.0).d(40.0, 100.0);
+    anchor
+        .p(black_box(2.0f32), 100.0)
+        .i(0.02, 5.0)
+        .d(40.0, 100.0);
     let mut y = 0.0f32;
     twice("pid crate Pid<f32>::next_control_output + plant", || {
         let u = anchor.next_control_output(black_box(y)).output;
@@ -69,28 +75,37 @@ fn main() -> ! {
     for n in 0..256u16 {
         let _ = queue.insert(u32::from(n) + 1, n);
     }
-    twice("TimerQueue<u16, 256>::tick, one expiry re-armed per tick", || {
-        let mut fired = None;
-        queue.tick(|a| fired = Some(a));
-        if let Some(a) = fired {
-            let _ = queue.insert(256, a);
-        }
-    });
+    twice(
+        "TimerQueue<u16, 256>::tick, one expiry re-armed per tick",
+        || {
+            let mut fired = None;
+            queue.tick(|a| fired = Some(a));
+            if let Some(a) = fired {
+                let _ = queue.insert(256, a);
+            }
+        },
+    );
     let Ok(table) = DistanceTable::<8>::new(1000, &[100, 200, 300, 400, 500, 600, 700, 800]) else {
         debug::exit(debug::EXIT_FAILURE);
         loop {}
     };
-    let Ok(mut tracker) = Tracker::<u16, 256, 8>::new(table, 6) else { debug::exit(debug::EXIT_FAILURE); loop {} };
+    let Ok(mut tracker) = Tracker::<u16, 256, 8>::new(table, 6) else {
+        debug::exit(debug::EXIT_FAILURE);
+        loop {}
+    };
     let mut k = 0u32;
-    twice("Tracker<u16, 256, 8>::pulse, a trolley entering every 4 pulses", || {
-        if k % 4 == 0 {
-            let _ = tracker.enter(k as u16, (k % 8) as usize);
-        }
-        tracker.pulse(|e| {
-            black_box(e);
-        });
-        k = k.wrapping_add(1);
-    });
+    twice(
+        "Tracker<u16, 256, 8>::pulse, a trolley entering every 4 pulses",
+        || {
+            if k % 4 == 0 {
+                let _ = tracker.enter(k as u16, (k % 8) as usize);
+            }
+            tracker.pulse(|e| {
+                black_box(e);
+            });
+            k = k.wrapping_add(1);
+        },
+    );
     let mut word = 0u16;
     twice("decode", || {
         black_box(decode(black_box(word)).is_ok());
