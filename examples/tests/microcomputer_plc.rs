@@ -150,7 +150,7 @@ fn help() {
 }
 
 /// A real Modbus client that no one here wrote (pymodbus) reads the images, forces a coil and
-/// sees the program react. Needs `python3 -m pip install pymodbus`; `.ci/run` installs it and
+/// sees the program react. Needs `python3` with pymodbus on the PATH; `.ci/run` installs it in a virtual environment and
 /// runs this test.
 #[test]
 #[ignore = "needs python3 with pymodbus (python3 -m pip install pymodbus); .ci/run runs it"]
