@@ -16,8 +16,11 @@ pub struct StretchConfig {
     /// 2 (the default) means a single missed or extra pulse never causes a recalculation:
     /// the next measurement returns to the old value and the odd one is forgotten.
     pub confirmations: u8,
-    /// A measurement further than this from SIA (per mille of SIA) is not a stretch but a
-    /// fault (a dead initiator, a chain break) and is rejected outright. Default 100 (10 %).
+    /// A measurement further than this from the accepted DIA (per mille of it) is not a
+    /// stretch but a fault (a dead initiator, a chain break) and is rejected outright. Default
+    /// 100 (10 %). Measured from the accepted DIA rather than from SIA: a chain stretches a
+    /// little between two measurements, however far it has stretched in all, so the meter
+    /// follows it for life; a limit around SIA stopped following at 10 % (111 ‰ of stretch).
     pub plausible_per_mille: u32,
     /// Stretch (per mille, as [`StretchMeter::stretch_per_mille`]) past which the alarm is on:
     /// time to shorten the chain. Default 20 (2 %, 8 m on a 400 m chain).
@@ -221,8 +224,8 @@ impl StretchMeter {
     pub fn measure(&mut self, dia: u32) -> Measurement {
         self.measurements = self.measurements.saturating_add(1);
         let limit =
-            u64::from(self.config.sia).saturating_mul(u64::from(self.config.plausible_per_mille));
-        let off = u64::from(self.config.sia.abs_diff(dia)).saturating_mul(1000);
+            u64::from(self.accepted).saturating_mul(u64::from(self.config.plausible_per_mille));
+        let off = u64::from(self.accepted.abs_diff(dia)).saturating_mul(1000);
         if dia == 0 || off > limit {
             self.rejected = self.rejected.saturating_add(1);
             return Measurement::Implausible { dia };
@@ -320,6 +323,23 @@ mod tests {
         assert_eq!(m.measure(2999), Measurement::Pending { dia: 2999 });
         assert_eq!(m.measure(3001), Measurement::Pending { dia: 3001 });
         assert_eq!(m.dia(), 3000);
+    }
+
+    #[test]
+    fn follows_a_chain_past_ten_per_cent_step_by_step() {
+        // 3000 pulses new; the chain stretches 25 % over its life, a few pulses at a time.
+        let mut m = StretchMeter::new(StretchConfig::new(3000)).unwrap();
+        let mut dia = 3000;
+        while dia > 2400 {
+            dia -= 5;
+            m.measure(dia);
+            m.measure(dia);
+        }
+        assert_eq!(m.dia(), 2400);
+        assert_eq!(m.stretch_per_mille(), 250);
+        assert_eq!(m.rejected(), 0);
+        // A sudden jump is still a fault.
+        assert_eq!(m.measure(3000), Measurement::Implausible { dia: 3000 });
     }
 
     #[test]

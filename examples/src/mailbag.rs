@@ -192,6 +192,19 @@ impl Config {
                 self.readings
             ));
         }
+        // The voter needs k readings (with cams, or consecutive): more than a passage has would
+        // reject every trolley.
+        let k = match self.strategy {
+            Strategy::Majority { min_samples } => min_samples,
+            Strategy::Consecutive { k } => k,
+            _ => 1,
+        };
+        if k == 0 || k > self.readings {
+            return Err(format!(
+                "vote-k must be between 1 and readings ({}), got {k}",
+                self.readings
+            ));
+        }
         if !(MIN_GAP_PULSES..=1000).contains(&self.mean_gap_pulses) {
             return Err(format!(
                 "mean-gap-pulses must be between {MIN_GAP_PULSES} and 1000, got {}",
@@ -291,6 +304,8 @@ pub struct Outcomes {
     pub rejected: u64,
     /// Routed, but never tipped: reached the chain end with the sack.
     pub not_tipped: u64,
+    /// Routed and still on the chain when the run ended. The five outcomes add up to `sacks`.
+    pub on_chain: u64,
 }
 
 impl Outcomes {
@@ -300,6 +315,7 @@ impl Outcomes {
         self.misdelivered += o.misdelivered;
         self.rejected += o.rejected;
         self.not_tipped += o.not_tipped;
+        self.on_chain += o.on_chain;
     }
 }
 
@@ -712,6 +728,8 @@ fn run_dock(
                 },
                 Route::Reject(_) => years[year].outcomes.rejected += 1,
             }
+            // A rejected sack goes to the manual station at the reader: no tipper can drop it.
+            carried.has_sack = carried.routed;
             on_chain[pulse as usize % ring_len] = Some(carried);
         }
 
@@ -720,6 +738,15 @@ fn run_dock(
         }
     }
     progress(pulses_total % 65_536);
+    // Sacks still riding to their bins when the run ends.
+    let still = on_chain
+        .iter()
+        .flatten()
+        .filter(|c| c.has_sack && c.routed)
+        .count() as u64;
+    if let Some(last) = years.last_mut() {
+        last.outcomes.on_chain += still;
+    }
     Ok(DockResult {
         years,
         curve,

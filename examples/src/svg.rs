@@ -4,6 +4,7 @@
 use std::fmt::Write as _;
 
 /// One line of a line chart.
+#[derive(Clone, Debug)]
 pub struct Series<'a> {
     /// Legend text.
     pub label: &'a str,
@@ -153,6 +154,14 @@ pub fn bar_chart(
                 sy(v),
                 bar_w * 0.9,
                 TOP + ph - sy(v),
+                trim(v)
+            );
+            // The value above the bar, so that a zero bar is seen to be zero, not missing.
+            let _ = writeln!(
+                svg,
+                r#"<text x="{:.1}" y="{:.1}" text-anchor="middle" font-size="11">{}</text>"#,
+                x + bar_w * 0.45,
+                sy(v) - 4.0,
                 trim(v)
             );
         }

@@ -164,13 +164,14 @@ fn summary(r: &Report) -> String {
     );
     let _ = writeln!(
         s,
-        "{:<38} {:>9} {:>9} {:>8} {:>8} {:>9} {:>11} {:>9}",
+        "{:<38} {:>9} {:>9} {:>8} {:>8} {:>10} {:>8} {:>11} {:>9}",
         "controller",
         "sacks",
         "delivered",
         "misdeliv",
         "rejected",
         "not tipped",
+        "on chain",
         "misdeliv/M",
         "|tip err|"
     );
@@ -178,13 +179,14 @@ fn summary(r: &Report) -> String {
         let o = &sc.outcomes;
         let _ = writeln!(
             s,
-            "{:<38} {:>9} {:>9} {:>8} {:>8} {:>9} {:>11.1} {:>7.2} m",
+            "{:<38} {:>9} {:>9} {:>8} {:>8} {:>10} {:>8} {:>11.1} {:>7.2} m",
             sc.name,
             o.sacks,
             o.delivered,
             o.misdelivered,
             o.rejected,
             o.not_tipped,
+            o.on_chain,
             sc.misdelivered_per_million,
             sc.tip_error.mean_abs_m
         );
@@ -273,6 +275,18 @@ fn picture(r: &Report) -> String {
         "|error| at tipper set (m)",
         &series,
     );
+    // The corrected runs hug zero on that scale: the same two lines on a scale of their own.
+    let corrected_only: Vec<Series<'_>> = series
+        .iter()
+        .filter(|s| s.colour == colours[1])
+        .cloned()
+        .collect();
+    let zoom = svg::line_chart(
+        "With stretch correction, on its own scale",
+        "year",
+        "|error| at tipper set (m)",
+        &corrected_only,
+    );
     // What voting buys shows once the tracking is right: compare the two corrected runs.
     let corrected: Vec<&mailbag::ScenarioReport> = r
         .scenarios
@@ -296,7 +310,7 @@ fn picture(r: &Report) -> String {
         })
         .collect();
     let bars = svg::bar_chart(
-        "Misreads with stretch correction on",
+        "Misdelivered and rejected sacks, stretch correction on",
         "sacks per million",
         &names,
         &[
@@ -304,8 +318,9 @@ fn picture(r: &Report) -> String {
             ("rejected (manual)", "#f39c12", per_million(|o| o.rejected)),
         ],
     );
-    let bars = bars.replacen("<svg ", "<svg y=\"420\" ", 1);
+    let zoom = zoom.replacen("<svg ", "<svg y=\"420\" ", 1);
+    let bars = bars.replacen("<svg ", "<svg y=\"840\" ", 1);
     format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"720\" height=\"840\">\n{lines}{bars}</svg>\n"
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"720\" height=\"1260\">\n{lines}{zoom}{bars}</svg>\n"
     )
 }
