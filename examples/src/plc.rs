@@ -218,6 +218,9 @@ pub struct Plant {
     pub outputs: [u16; OW],
     /// Simulated time, µs.
     pub clock_us: u64,
+    /// In real-time mode (the Modbus server) the clock is the wall clock, so the executive's
+    /// busy time, jitter and load are the real ones.
+    real_clock: Option<std::time::Instant>,
     parts: Vec<Part>,
     next_arrival_ms: u32,
     /// Outcomes.
@@ -255,6 +258,7 @@ impl Plant {
             inputs: [0; IW],
             outputs: [0; OW],
             clock_us: 0,
+            real_clock: None,
             parts: Vec::new(),
             next_arrival_ms: 1_000,
             tally: Tally::default(),
@@ -359,6 +363,14 @@ impl Plant {
     }
 }
 
+impl Plant {
+    /// From now on the clock is the wall clock (real-time mode): the cycle statistics measure
+    /// this machine, not the simulated CPU.
+    pub fn use_real_clock(&mut self) {
+        self.real_clock = Some(std::time::Instant::now());
+    }
+}
+
 impl Io<IW, OW> for Plant {
     fn read_inputs(&mut self, raw: &mut [u16; IW]) {
         *raw = self.inputs;
@@ -367,6 +379,10 @@ impl Io<IW, OW> for Plant {
         self.outputs = *outputs;
     }
     fn now_us(&mut self) -> u32 {
+        if let Some(start) = self.real_clock {
+            // The wall clock, wrapping at 2^32 µs as a hardware timer would.
+            return (start.elapsed().as_micros() & u128::from(u32::MAX)) as u32;
+        }
         // Each clock read costs the simulated CPU 1 ms, so a cycle (two reads) is busy 1 ms.
         self.clock_us += 1_000;
         (self.clock_us & u64::from(u32::MAX)) as u32

@@ -149,18 +149,14 @@ fn help() {
     }
 }
 
-/// A real Modbus client that no one here wrote (pymodbus) reads the images, forces a coil and
-/// sees the program react. Needs `python3` with pymodbus on the PATH; `.ci/run` installs it in a virtual environment and
-/// runs this test.
-#[test]
-#[ignore = "needs python3 with pymodbus (python3 -m pip install pymodbus); .ci/run runs it"]
-fn modbus_with_pymodbus() {
+/// The PLC serving Modbus/TCP on a free port for `seconds`; its host and port.
+fn modbus_server(seconds: &str) -> (std::process::Child, String, String) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_microcomputer-plc"))
         .args([
             "--modbus",
             "127.0.0.1:0",
             "--seconds",
-            "12",
+            seconds,
             "--json",
             "--no-svg",
         ])
@@ -172,15 +168,174 @@ fn modbus_with_pymodbus() {
     BufReader::new(child.stderr.take().unwrap())
         .read_line(&mut line)
         .unwrap();
-    let address = line
-        .split_whitespace()
-        .nth(2)
-        .unwrap()
-        .trim_end_matches(':');
+    let address = line.split_whitespace().nth(2).unwrap().to_string();
     let (host, port) = address.rsplit_once(':').unwrap();
+    (child, host.to_string(), port.to_string())
+}
+
+/// One request as raw bytes (unit id and PDU), the raw reply's unit id and PDU.
+fn raw(stream: &mut std::net::TcpStream, unit: u8, pdu: &[u8]) -> (u8, Vec<u8>) {
+    use std::io::Read;
+    let mut frame = vec![0x12, 0x34, 0, 0];
+    frame.extend_from_slice(&u16::try_from(pdu.len() + 1).unwrap().to_be_bytes());
+    frame.push(unit);
+    frame.extend_from_slice(pdu);
+    stream.write_all(&frame).unwrap();
+    let mut head = [0u8; 7];
+    stream.read_exact(&mut head).unwrap();
+    assert_eq!(
+        head[..4],
+        [0x12, 0x34, 0, 0],
+        "transaction and protocol echoed"
+    );
+    let len = usize::from(u16::from_be_bytes([head[4], head[5]]));
+    let mut body = vec![0u8; len - 1];
+    stream.read_exact(&mut body).unwrap();
+    (head[6], body)
+}
+
+/// Every rule of the specification the server must keep, checked with raw frames (no client
+/// library between the test and the wire).
+#[test]
+fn modbus_raw_frames_follow_the_specification() {
+    let (child, host, port) = modbus_server("6");
+    let mut s = std::net::TcpStream::connect(format!("{host}:{port}")).unwrap();
+    s.set_read_timeout(Some(std::time::Duration::from_secs(3)))
+        .unwrap();
+    let exc = |f: u8, code: u8| vec![f | 0x80, code];
+    // Unit ids 0, 1 and 255 are answered; another is a gateway's "no device".
+    for unit in [0, 1, 255] {
+        let (u, pdu) = raw(&mut s, unit, &[2, 0, 0, 0, 16]);
+        assert_eq!((u, pdu[0], pdu[1]), (unit, 2, 2), "unit {unit}");
+    }
+    assert_eq!(raw(&mut s, 7, &[2, 0, 0, 0, 16]).1, exc(2, 0x0B));
+    // Function codes it does not serve, including those with the exception bit set.
+    for f in [0x00, 0x07, 0x2B, 0x7F, 0x81, 0xFF] {
+        assert_eq!(
+            raw(&mut s, 1, &[f, 0, 0, 0, 1]).1,
+            exc(f, 1),
+            "function {f:#x}"
+        );
+    }
+    // Addresses outside the map: exception 2.
+    for pdu in [
+        &[1, 0, 16, 0, 1][..],  // coil 16
+        &[1, 0x03, 0xF2, 0, 8], // coils 1010-1017 cross the end
+        &[2, 0, 16, 0, 1],      // discrete input 16
+        &[4, 0, 19, 0, 1],      // input register 19
+        &[3, 0, 1, 0, 15],      // holding registers 1-15
+        &[5, 0, 20, 0xFF, 0],   // write coil 20
+        &[6, 0, 3, 0, 1],       // write holding 3
+    ] {
+        assert_eq!(raw(&mut s, 1, pdu).1, exc(pdu[0], 2), "{pdu:?}");
+    }
+    // Quantities, byte counts and values: exception 3.
+    for pdu in [
+        &[1, 0, 0, 0, 0][..],          // quantity 0
+        &[1, 0, 0, 0x07, 0xD1],        // 2001 coils
+        &[4, 0, 0, 0, 126],            // 126 registers
+        &[15, 0, 0, 0, 9, 1, 0xFF],    // 9 coils need 2 bytes, 1 given
+        &[16, 0, 0, 0, 1, 3, 0, 1, 0], // 1 register needs 2 bytes, 3 given
+        &[6, 0, 0, 0, 2],              // release-all register takes 0 or 1
+        &[6, 0, 1, 0, 16],             // release output 16: no such point
+        &[5, 0, 0, 0x12, 0x34],        // a coil value other than 0x0000 / 0xFF00
+    ] {
+        assert_eq!(raw(&mut s, 1, pdu).1, exc(pdu[0], 3), "{pdu:?}");
+    }
+    // Force output 3 and see it listed as forced, then release that one point.
+    assert_eq!(
+        raw(&mut s, 1, &[5, 0, 3, 0xFF, 0]).1,
+        vec![5, 0, 3, 0xFF, 0]
+    );
+    let forced = |s: &mut std::net::TcpStream| raw(s, 1, &[2, 0, 100, 0, 16]).1[2] & 0b1000 != 0;
+    let wait = |s: &mut std::net::TcpStream, want: bool| {
+        for _ in 0..40 {
+            if forced(s) == want {
+                return true;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        false
+    };
+    assert!(wait(&mut s, true), "output 3 shown as forced");
+    assert_eq!(raw(&mut s, 1, &[6, 0, 1, 0, 3]).1, vec![6, 0, 1, 0, 3]);
+    assert!(wait(&mut s, false), "output 3 released alone");
+    // Counters span two registers: cycles in 3-4.
+    let r = raw(&mut s, 1, &[4, 0, 3, 0, 2]).1;
+    let cycles = u32::from_be_bytes([r[2], r[3], r[4], r[5]]);
+    assert!(cycles > 0, "{r:?}");
+    drop(s);
+    let out = child.wait_with_output().unwrap();
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let log = r["log"].to_string();
+    assert!(
+        log.contains("force output 3 on") && log.contains("release output 3"),
+        "{log}"
+    );
+}
+
+/// mbpoll, a Modbus client from Debian, against the server: reads, a force, a one-point
+/// release and the exceptions, as a user at a terminal would see them. `.ci/run` installs
+/// mbpoll and runs this test.
+#[test]
+#[ignore = "needs mbpoll (apt-get install mbpoll); .ci/run runs it"]
+fn modbus_with_mbpoll() {
+    let (child, host, port) = modbus_server("8");
+    let mbpoll = |args: &[&str]| {
+        let out = Command::new("mbpoll")
+            .args(["-m", "tcp", "-p", &port, "-0", "-1", "-o", "2"])
+            .args(args)
+            .output()
+            .unwrap();
+        (
+            out.status.success(),
+            String::from_utf8_lossy(&out.stdout).to_string()
+                + &String::from_utf8_lossy(&out.stderr),
+        )
+    };
+    // Read the input image with unit id 255, the input registers with unit id 0.
+    let (ok, text) = mbpoll(&["-a", "255", "-t", "1", "-r", "0", "-c", "16", &host]);
+    assert!(ok && text.contains("[15]:"), "{text}");
+    let (ok, text) = mbpoll(&["-a", "0", "-t", "3", "-r", "0", "-c", "19", &host]);
+    assert!(ok && text.contains("[18]:"), "{text}");
+    // Force input 1 (STOP) through coil 1001; discrete input 201 shows it forced.
+    let (ok, text) = mbpoll(&["-a", "1", "-t", "0", "-r", "1001", &host, "1"]);
+    assert!(ok, "{text}");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let (ok, text) = mbpoll(&["-a", "1", "-t", "1", "-r", "201", &host]);
+    assert!(ok && text.contains("[201]: \t1"), "{text}");
+    // Release that one input (holding register 2 <- 1).
+    let (ok, text) = mbpoll(&["-a", "1", "-t", "4", "-r", "2", &host, "1"]);
+    assert!(ok, "{text}");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let (_, text) = mbpoll(&["-a", "1", "-t", "1", "-r", "201", &host]);
+    assert!(text.contains("[201]: \t0"), "{text}");
+    // The exceptions, as mbpoll names them.
+    let (ok, text) = mbpoll(&["-a", "1", "-t", "0", "-r", "16", &host]);
+    assert!(!ok && text.contains("Illegal data address"), "{text}");
+    let (ok, text) = mbpoll(&["-a", "1", "-t", "4", "-r", "0", &host, "2"]);
+    assert!(!ok && text.contains("Illegal data value"), "{text}");
+    let (ok, text) = mbpoll(&["-a", "1", "-t", "3", "-r", "10", "-c", "10", &host]);
+    assert!(!ok && text.contains("Illegal data address"), "{text}");
+    let out = child.wait_with_output().unwrap();
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(
+        r["log"].to_string().contains("release input 1"),
+        "{}",
+        r["log"]
+    );
+}
+
+/// A real Modbus client that no one here wrote (pymodbus) reads the images, forces a coil and
+/// sees the program react. Needs `python3` with pymodbus on the PATH; `.ci/run` installs it in a virtual environment and
+/// runs this test.
+#[test]
+#[ignore = "needs python3 with pymodbus (python3 -m pip install pymodbus); .ci/run runs it"]
+fn modbus_with_pymodbus() {
+    let (child, host, port) = modbus_server("12");
     let client = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/modbus_client.py");
     let status = Command::new("python3")
-        .args([client, host, port])
+        .args([client, &host, &port])
         .status()
         .unwrap();
     assert!(status.success(), "the pymodbus client's checks failed");
@@ -188,7 +343,7 @@ fn modbus_with_pymodbus() {
     let r: Value = serde_json::from_slice(&out.stdout).unwrap();
     let log = r["log"].to_string();
     assert!(
-        log.contains("ForceInput(0, true)") && log.contains("ForceOutput(2, true)"),
+        log.contains("force input 0 on") && log.contains("force output 2 on"),
         "{log}"
     );
 }

@@ -35,9 +35,10 @@ def main():
 
     inputs = client.read_discrete_inputs(0, count=16)
     assert not inputs.isError(), inputs
-    registers = client.read_input_registers(0, count=10)
+    registers = client.read_input_registers(0, count=19)
     assert not registers.isError(), registers
-    cycles_before = registers.registers[2]
+    # 32-bit counters span two registers, high word first: cycles are 3-4.
+    cycles_before = registers.registers[3] << 16 | registers.registers[4]
     assert cycles_before > 0, "the PLC is cycling"
 
     # Stop the belt by forcing STOP, then see the motor go off.
@@ -55,8 +56,8 @@ def main():
     assert not client.write_coil(GATE, True).isError()
     wait_for("gate forced open", lambda: coils(GATE, 1)[0])
 
-    registers = client.read_input_registers(0, count=10)
-    assert registers.registers[2] > cycles_before, "cycles went on"
+    registers = client.read_input_registers(0, count=19)
+    assert (registers.registers[3] << 16 | registers.registers[4]) > cycles_before, "cycles went on"
     client.close()
     print("modbus end-to-end: ok")
 

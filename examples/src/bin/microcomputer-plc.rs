@@ -103,7 +103,13 @@ fn run(args: &Args) -> Result<(), String> {
         if !(args.seconds.is_finite() && args.seconds > 0.0) {
             return Err(format!("seconds must be > 0, got {}", args.seconds));
         }
-        serve(&mut sim, address, args.seconds, &mut log)?;
+        serve(
+            &mut sim,
+            address,
+            args.seconds,
+            &mut log,
+            !args.quiet && !args.json,
+        )?;
     } else {
         let commands: Vec<String> = match (&args.script, args.interactive) {
             (Some(_), true) => return Err("--script and --interactive exclude each other".into()),
@@ -201,17 +207,177 @@ fn execute(
 enum Request {
     ForceOutput(usize, bool),
     ForceInput(usize, bool),
+    ReleaseOutput(usize),
+    ReleaseInput(usize),
     ReleaseAll,
 }
 
-type Storage = ModbusStorage<1024, 16, 16, 16>;
+impl std::fmt::Display for Request {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let on = |v: bool| if v { "on" } else { "off" };
+        match *self {
+            Request::ForceOutput(p, v) => write!(f, "force output {p} {}", on(v)),
+            Request::ForceInput(p, v) => write!(f, "force input {p} {}", on(v)),
+            Request::ReleaseOutput(p) => write!(f, "release output {p}"),
+            Request::ReleaseInput(p) => write!(f, "release input {p}"),
+            Request::ReleaseAll => f.write_str("release all forced points"),
+        }
+    }
+}
+
+type Storage = ModbusStorage<1024, 1024, 32, 32>;
 
 struct Shared {
     storage: Storage,
     requests: Vec<Request>,
 }
 
-const INPUT_COILS: usize = 1000;
+/// The Modbus map (documented in examples/README.md). Every address outside it is answered
+/// with exception 2, ILLEGAL DATA ADDRESS.
+mod map {
+    /// Coils 0–15: the output image; writing one forces that output.
+    pub const OUTPUT_COILS: u16 = 0;
+    /// Coils 1000–1015: the forced value of input p; writing one forces that input.
+    pub const INPUT_COILS: u16 = 1000;
+    /// Discrete inputs 0–15: the input image.
+    pub const INPUTS: u16 = 0;
+    /// Discrete inputs 100–115: output p is forced.
+    pub const OUTPUT_FORCED: u16 = 100;
+    /// Discrete inputs 200–215: input p is forced.
+    pub const INPUT_FORCED: u16 = 200;
+    /// Input registers 0–18 (32-bit counters take two, high word first).
+    pub const INPUT_REGISTERS: u16 = 19;
+    /// Holding register 0: write 1 to release every forced point; 1: write p to release output
+    /// p; 2: write p to release input p. They read as 0.
+    pub const HOLDING_REGISTERS: u16 = 3;
+    /// Points per image.
+    pub const POINTS: u16 = 16;
+
+    /// Whether `[start, start + count)` lies inside one of `blocks` (start, length).
+    pub fn inside(start: u16, count: u16, blocks: &[(u16, u16)]) -> bool {
+        let end = u32::from(start) + u32::from(count);
+        blocks
+            .iter()
+            .any(|&(b, n)| start >= b && end <= u32::from(b) + u32::from(n))
+    }
+}
+
+/// Modbus exception codes.
+const ILLEGAL_FUNCTION: u8 = 1;
+const ILLEGAL_DATA_ADDRESS: u8 = 2;
+const ILLEGAL_DATA_VALUE: u8 = 3;
+const GATEWAY_TARGET_FAILED: u8 = 0x0B;
+
+/// The unit ids this server answers: 1 (its own), and 0 and 255, which the Modbus/TCP
+/// implementation guide leaves to a server reached by its IP address. Others are answered with
+/// exception 0x0B, as a gateway with no device behind that id.
+fn answers_unit(unit: u8) -> bool {
+    matches!(unit, 0 | 1 | 255)
+}
+
+/// Checks a request PDU against the specification and the map; the exception code if it fails.
+/// Order as the specification's server state diagrams: function, quantity and byte count,
+/// address range, value.
+fn check(pdu: &[u8]) -> Result<(), u8> {
+    let word = |i: usize| pdu.get(i..i + 2).map(|b| u16::from_be_bytes([b[0], b[1]]));
+    let (Some(&function), Some(address)) = (pdu.first(), word(1)) else {
+        return Err(ILLEGAL_DATA_VALUE);
+    };
+    let coils = [
+        (map::OUTPUT_COILS, map::POINTS),
+        (map::INPUT_COILS, map::POINTS),
+    ];
+    let discretes = [
+        (map::INPUTS, map::POINTS),
+        (map::OUTPUT_FORCED, map::POINTS),
+        (map::INPUT_FORCED, map::POINTS),
+    ];
+    let holding = [(0, map::HOLDING_REGISTERS)];
+    let holding_value_ok = |register: u16, value: u16| match register {
+        0 => value <= 1,
+        _ => value < map::POINTS,
+    };
+    let quantity = word(3).ok_or(ILLEGAL_DATA_VALUE)?;
+    match function {
+        1..=4 => {
+            let max = if function <= 2 { 2000 } else { 125 };
+            if !(1..=max).contains(&quantity) || pdu.len() != 5 {
+                return Err(ILLEGAL_DATA_VALUE);
+            }
+            let ok = match function {
+                1 => map::inside(address, quantity, &coils),
+                2 => map::inside(address, quantity, &discretes),
+                3 => map::inside(address, quantity, &holding),
+                _ => map::inside(address, quantity, &[(0, map::INPUT_REGISTERS)]),
+            };
+            if ok {
+                Ok(())
+            } else {
+                Err(ILLEGAL_DATA_ADDRESS)
+            }
+        }
+        5 => {
+            // The value is the "quantity" field here: only 0x0000 and 0xFF00 are coil values.
+            if pdu.len() != 5 || !matches!(quantity, 0x0000 | 0xFF00) {
+                return Err(ILLEGAL_DATA_VALUE);
+            }
+            if map::inside(address, 1, &coils) {
+                Ok(())
+            } else {
+                Err(ILLEGAL_DATA_ADDRESS)
+            }
+        }
+        6 => {
+            if pdu.len() != 5 {
+                return Err(ILLEGAL_DATA_VALUE);
+            }
+            if !map::inside(address, 1, &holding) {
+                return Err(ILLEGAL_DATA_ADDRESS);
+            }
+            if holding_value_ok(address, quantity) {
+                Ok(())
+            } else {
+                Err(ILLEGAL_DATA_VALUE)
+            }
+        }
+        15 | 16 => {
+            let max = if function == 15 { 0x07B0 } else { 0x007B };
+            let bytes = usize::from(*pdu.get(5).ok_or(ILLEGAL_DATA_VALUE)?);
+            let want = if function == 15 {
+                usize::from(quantity).div_ceil(8)
+            } else {
+                2 * usize::from(quantity)
+            };
+            if !(1..=max).contains(&quantity) || bytes != want || pdu.len() != 6 + bytes {
+                return Err(ILLEGAL_DATA_VALUE);
+            }
+            let blocks: &[(u16, u16)] = if function == 15 { &coils } else { &holding };
+            if !map::inside(address, quantity, blocks) {
+                return Err(ILLEGAL_DATA_ADDRESS);
+            }
+            if function == 16 {
+                for k in 0..quantity {
+                    let value = word(6 + 2 * usize::from(k)).ok_or(ILLEGAL_DATA_VALUE)?;
+                    if !holding_value_ok(address + k, value) {
+                        return Err(ILLEGAL_DATA_VALUE);
+                    }
+                }
+            }
+            Ok(())
+        }
+        _ => Err(ILLEGAL_FUNCTION),
+    }
+}
+
+/// An exception response to the request in `frame` (MBAP header and PDU).
+fn exception(frame: &[u8], function: u8, code: u8) -> Vec<u8> {
+    let mut reply = frame[..4].to_vec(); // transaction id, protocol id
+    reply.extend_from_slice(&3u16.to_be_bytes()); // unit id + 2 bytes of PDU
+    reply.push(frame[6]);
+    reply.push(function | 0x80);
+    reply.push(code);
+    reply
+}
 
 /// Runs the PLC in real time for `seconds`, serving its images over Modbus/TCP.
 fn serve(
@@ -219,14 +385,16 @@ fn serve(
     address: &str,
     seconds: f64,
     log: &mut Vec<String>,
+    echo: bool,
 ) -> Result<(), String> {
     let listener =
         TcpListener::bind(address).map_err(|e| format!("cannot listen on {address}: {e}"))?;
     let local = listener.local_addr().map_err(|e| e.to_string())?;
     // On stderr, so that --json output stays clean; a test reads the address from here.
     eprintln!(
-        "Modbus/TCP on {local}: discrete inputs 0-15 = inputs, coils 0-15 = outputs, coils 1000-1015 force inputs"
+        "Modbus/TCP on {local} (unit ids 0, 1, 255): discrete inputs 0-15 = inputs, 100-115 / 200-215 = output / input forced; coils 0-15 = outputs, 1000-1015 force inputs; input registers 0-18; holding 0-2 release forcing"
     );
+    sim.plant.use_real_clock();
     let shared = Arc::new(Mutex::new(Shared {
         storage: Storage::new(),
         requests: Vec::new(),
@@ -252,21 +420,28 @@ fn serve(
             let result = match r {
                 Request::ForceOutput(p, v) => sim.plc.force_output(p, v).map_err(|e| e.to_string()),
                 Request::ForceInput(p, v) => sim.plc.force_input(p, v).map_err(|e| e.to_string()),
+                Request::ReleaseOutput(p) => sim.plc.unforce_output(p).map_err(|e| e.to_string()),
+                Request::ReleaseInput(p) => sim.plc.unforce_input(p).map_err(|e| e.to_string()),
                 Request::ReleaseAll => {
-                    for p in 0..16 {
+                    for p in 0..usize::from(map::POINTS) {
                         let _ = sim.plc.unforce_input(p);
                         let _ = sim.plc.unforce_output(p);
                     }
                     Ok(())
                 }
             };
-            log.push(format!(
-                "modbus: {r:?}{}",
+            let line = format!(
+                "modbus, cycle {}: {r}{}",
+                sim.plc.cycle_count(),
                 result
                     .err()
                     .map(|e| format!(" refused: {e}"))
                     .unwrap_or_default()
-            ));
+            );
+            if echo {
+                println!("{line}");
+            }
+            log.push(line);
         }
         sim.run(1);
         if let Ok(mut s) = shared.lock() {
@@ -280,28 +455,41 @@ fn serve(
     Ok(())
 }
 
-/// Copies the images and counters into the Modbus tables.
+/// Copies the images, forcing and counters into the Modbus tables.
 fn publish(sim: &Simulator, storage: &mut Storage) {
-    for p in 0..16 {
-        storage.discretes[p] = sim.plc.inputs().get(p);
-        storage.coils[p] = sim.plc.outputs().get(p);
-        storage.coils[INPUT_COILS + p] = sim.plc.forced_inputs().forced(p).unwrap_or(false);
+    let points = usize::from(map::POINTS);
+    for p in 0..points {
+        storage.discretes[usize::from(map::INPUTS) + p] = sim.plc.inputs().get(p);
+        storage.discretes[usize::from(map::OUTPUT_FORCED) + p] =
+            sim.plc.forced_outputs().forced(p).is_some();
+        storage.discretes[usize::from(map::INPUT_FORCED) + p] =
+            sim.plc.forced_inputs().forced(p).is_some();
+        storage.coils[usize::from(map::OUTPUT_COILS) + p] = sim.plc.outputs().get(p);
+        storage.coils[usize::from(map::INPUT_COILS) + p] =
+            sim.plc.forced_inputs().forced(p).unwrap_or(false);
     }
     let st = sim.plc.stats();
     let t = sim.plant.tally;
     let clip = |v: u64| u16::try_from(v).unwrap_or(u16::MAX);
-    let values = [
-        clip(u64::from(sim.program.parts().unsigned_abs())),
-        clip(u64::from(sim.program.jam_et())),
-        clip(st.cycles),
-        clip(st.overruns),
-        clip(u64::from(st.load_per_mille(sim.plc.config().period_us))),
-        clip(sim.program.timers_waiting() as u64),
-        clip(u64::from(t.good_passed)),
-        clip(u64::from(t.bad_rejected)),
-        clip(u64::from(t.bad_passed)),
-        clip(u64::from(t.jams)),
-    ];
+    let wide = |v: u64| {
+        let v = u32::try_from(v).unwrap_or(u32::MAX);
+        [(v >> 16) as u16, v as u16]
+    };
+    let mut values = Vec::with_capacity(usize::from(map::INPUT_REGISTERS));
+    values.extend(wide(u64::from(sim.program.parts().unsigned_abs()))); // 0-1
+    values.push(clip(u64::from(sim.program.jam_et()))); // 2
+    values.extend(wide(st.cycles)); // 3-4
+    values.extend(wide(st.overruns)); // 5-6
+    values.push(clip(u64::from(
+        st.load_per_mille(sim.plc.config().period_us),
+    ))); // 7
+    values.push(clip(sim.program.timers_waiting() as u64)); // 8
+    values.extend(wide(u64::from(t.good_passed))); // 9-10
+    values.extend(wide(u64::from(t.bad_rejected))); // 11-12
+    values.extend(wide(u64::from(t.bad_passed))); // 13-14
+    values.extend(wide(u64::from(t.jams))); // 15-16
+    values.push(clip(u64::from(st.last_us))); // 17
+    values.push(clip(u64::from(st.jitter_us))); // 18
     storage.inputs[..values.len()].copy_from_slice(&values);
 }
 
@@ -313,12 +501,27 @@ fn client(mut stream: TcpStream, state: &Mutex<Shared>) -> Result<(), String> {
             .read_exact(&mut buf[..7])
             .map_err(|e| e.to_string())?;
         let length = usize::from(u16::from_be_bytes([buf[4], buf[5]]));
-        if !(2..=250).contains(&length) {
-            return Err(format!("bad MBAP length {length}"));
+        if !(2..=250).contains(&length) || buf[2..4] != [0, 0] {
+            return Err(format!("not a Modbus/TCP frame (length {length})"));
         }
         stream
             .read_exact(&mut buf[7..6 + length])
             .map_err(|e| e.to_string())?;
+        let unit = buf[6];
+        let function = buf[7];
+        let verdict = if answers_unit(unit) {
+            check(&buf[7..6 + length])
+        } else {
+            Err(GATEWAY_TARGET_FAILED)
+        };
+        if let Err(code) = verdict {
+            stream
+                .write_all(&exception(&buf, function, code))
+                .map_err(|e| e.to_string())?;
+            continue;
+        }
+        // rmodbus answers unit 1; 0 and 255 are ours too (see answers_unit).
+        buf[6] = 1;
         let mut response = Vec::new();
         let mut frame = ModbusFrame::new(1, &buf, ModbusProto::TcpUdp, &mut response);
         frame.parse().map_err(|e| format!("{e:?}"))?;
@@ -330,29 +533,39 @@ fn client(mut stream: TcpStream, state: &Mutex<Shared>) -> Result<(), String> {
                     .map_err(|e| format!("{e:?}"))?;
             } else {
                 let before_coils = s.storage.coils;
-                let before_hold = s.storage.holdings[0];
                 frame
                     .process_write(&mut s.storage)
                     .map_err(|e| format!("{e:?}"))?;
                 let mut requests = Vec::new();
-                for p in 0..16 {
-                    if s.storage.coils[p] != before_coils[p] || frame_writes_coil(&buf, p) {
-                        requests.push(Request::ForceOutput(p, s.storage.coils[p]));
+                for p in 0..usize::from(map::POINTS) {
+                    let out = usize::from(map::OUTPUT_COILS) + p;
+                    if s.storage.coils[out] != before_coils[out] || frame_writes_coil(&buf, out) {
+                        requests.push(Request::ForceOutput(p, s.storage.coils[out]));
                     }
-                    let q = INPUT_COILS + p;
+                    let q = usize::from(map::INPUT_COILS) + p;
                     if s.storage.coils[q] != before_coils[q] || frame_writes_coil(&buf, q) {
                         requests.push(Request::ForceInput(p, s.storage.coils[q]));
                     }
                 }
-                if s.storage.holdings[0] == 1 && before_hold != 1 {
+                // Holding registers are commands: act on what was written, then read as 0.
+                if writes_holding(&buf, 0) && s.storage.holdings[0] == 1 {
                     requests.push(Request::ReleaseAll);
-                    s.storage.holdings[0] = 0;
                 }
+                if writes_holding(&buf, 1) {
+                    requests.push(Request::ReleaseOutput(usize::from(s.storage.holdings[1])));
+                }
+                if writes_holding(&buf, 2) {
+                    requests.push(Request::ReleaseInput(usize::from(s.storage.holdings[2])));
+                }
+                s.storage.holdings[..3].fill(0);
                 s.requests.extend(requests);
             }
         }
         if frame.response_required {
             frame.finalize_response().map_err(|e| format!("{e:?}"))?;
+            if let Some(u) = response.get_mut(6) {
+                *u = unit;
+            }
             stream.write_all(&response).map_err(|e| e.to_string())?;
         }
     }
@@ -366,6 +579,18 @@ fn frame_writes_coil(buf: &[u8], coil: usize) -> bool {
             .get(8..10)
             .map(|b| usize::from(u16::from_be_bytes([b[0], b[1]])))
             == Some(coil)
+}
+
+/// Whether a write request (function 6 or 16) writes holding register `register`.
+fn writes_holding(buf: &[u8], register: u16) -> bool {
+    let word = |i: usize| buf.get(i..i + 2).map(|b| u16::from_be_bytes([b[0], b[1]]));
+    match (buf.get(7), word(8), word(10)) {
+        (Some(6), Some(a), _) => a == register,
+        (Some(16), Some(a), Some(n)) => {
+            register >= a && u32::from(register) < u32::from(a) + u32::from(n)
+        }
+        _ => false,
+    }
 }
 
 /// A timing diagram of the chosen signals over the last `window` cycles.
