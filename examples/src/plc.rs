@@ -79,6 +79,43 @@ pub enum Report {
     Shift(u8),
 }
 
+impl std::fmt::Display for Report {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Report::Batch(n) => write!(f, "batch of 10 parts, {n} parts in all"),
+            Report::Shift(h) => write!(f, "shift report at {h:02}:00"),
+        }
+    }
+}
+
+/// Samples of the timing diagram kept (the last ones): memory stays flat however long it runs.
+pub const TRACE_CAP: usize = 100_000;
+/// Reports kept for `spool` and the summary (the total is counted apart).
+pub const REPORTS_KEPT: usize = 1_000;
+/// The most cycles one `run N` takes: 1 000 000 cycles of 50 ms, 13.9 simulated hours.
+pub const RUN_MAX: u64 = 1_000_000;
+/// `cont` runs until a breakpoint, at most this many cycles (one simulated hour).
+pub const CONT_MAX: u64 = 72_000;
+
+/// The monitor's commands, as `help` lists them.
+pub const HELP: &str = "\
+run N                      run N cycles (at most 1000000), stopping at a breakpoint
+step                       one cycle, then show the images
+cont                       run until a breakpoint, at most 72000 cycles (one simulated hour)
+break cycle N              stop after cycle N
+break in POINT on          stop when an input comes on
+break out POINT on|off     stop when an output comes on / goes off
+clear breaks               remove every breakpoint
+force in|out POINT on|off  force a point (the program and the hardware cannot change it)
+unforce in|out POINT       release a forced point
+show                       the images, forced points marked
+spool                      reports waiting in the spool and run
+stats                      parts, cycle statistics, load
+help                       this list
+quit                       end (the summary and the timing diagram follow)
+POINT is a number 0-15 or a name: start stop part bad reset (inputs), motor jam gate run (outputs)
+";
+
 /// Actions in the timer register.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum GateAction {
@@ -408,12 +445,14 @@ pub struct Simulator {
     pub program: Conveyor,
     /// The plant.
     pub plant: Plant,
-    /// Active breakpoints.
+    /// Active breakpoints; each stops a run on the cycle it comes to hold.
     pub breakpoints: Vec<Breakpoint>,
     /// The timing diagram.
-    pub trace: Vec<Sample>,
+    pub trace: std::collections::VecDeque<Sample>,
     /// Reports run in the reserve.
-    pub reports: Vec<Report>,
+    pub reports: std::collections::VecDeque<Report>,
+    /// Reports run in all.
+    pub reports_run: u64,
     /// The calendar clock, advanced by the cycle.
     pub clock: DateTime,
     /// Shift changes: programs started at given minutes.
@@ -448,8 +487,9 @@ impl Simulator {
             program: Conveyor::new(),
             plant: Plant::new(seed),
             breakpoints: Vec::new(),
-            trace: Vec::new(),
-            reports: Vec::new(),
+            trace: std::collections::VecDeque::new(),
+            reports: std::collections::VecDeque::new(),
+            reports_run: 0,
             clock: DateTime::new(2026, 11, 23, 13, 58, 30).unwrap_or_else(|_| unreachable!()),
             table,
         }
@@ -459,7 +499,10 @@ impl Simulator {
     /// stopped early.
     pub fn run(&mut self, cycles: u64) -> (u64, Option<Halt>) {
         let mut done = 0u64;
+        let mut before = Vec::with_capacity(self.breakpoints.len());
         while done < cycles {
+            before.clear();
+            before.extend(self.breakpoints.iter().map(|b| self.plc.reached(*b)));
             let program = &mut self.program;
             if let Err(halt) = self.plc.cycle(&mut self.plant, |scan| program.scan(scan)) {
                 return (done, Some(halt));
@@ -474,12 +517,19 @@ impl Simulator {
                 }
             }
             // Level C: the reserve runs the spool.
-            let reports = &mut self.reports;
+            let (reports, run) = (&mut self.reports, &mut self.reports_run);
             self.plc
                 .reserve(&mut self.plant, &mut self.program.spool, 5_000, |batch| {
-                    reports.push(batch)
+                    if reports.len() == REPORTS_KEPT {
+                        reports.pop_front();
+                    }
+                    reports.push_back(batch);
+                    *run += 1;
                 });
-            self.trace.push(Sample {
+            if self.trace.len() == TRACE_CAP {
+                self.trace.pop_front();
+            }
+            self.trace.push_back(Sample {
                 cycle: self.plc.cycle_count(),
                 inputs: self.plc.inputs().word(0).unwrap_or(0),
                 outputs: self.plc.outputs().word(0).unwrap_or(0),
@@ -488,7 +538,13 @@ impl Simulator {
             let busy_ms = self.plc.stats().last_us / 1000;
             self.plant.advance(PERIOD_MS.saturating_sub(busy_ms).max(1));
             self.plc.capture(&self.plant.inputs);
-            if let Some(&b) = self.breakpoints.iter().find(|b| self.plc.reached(**b)) {
+            // A breakpoint stops the run on the cycle it comes to hold, not while it holds.
+            let fired = self
+                .breakpoints
+                .iter()
+                .zip(&before)
+                .find(|&(b, &was)| !was && self.plc.reached(*b));
+            if let Some((&b, _)) = fired {
                 return (done, Some(Halt::Breakpoint(b)));
             }
         }
@@ -511,14 +567,16 @@ impl Simulator {
             match s.copied() {
                 Some("1" | "on") => Ok(true),
                 Some("0" | "off") => Ok(false),
-                other => Err(format!("expected on/off or 1/0, got {other:?}")),
+                Some(other) => Err(format!("expected on/off or 1/0, got {other}")),
+                None => Err("expected on/off or 1/0 at the end".into()),
             }
         };
         let io_side = |s: Option<&&str>| -> Result<bool, String> {
             match s.copied() {
                 Some("in") => Ok(true),
                 Some("out") => Ok(false),
-                other => Err(format!("expected in or out, got {other:?}")),
+                Some(other) => Err(format!("expected in or out, got {other}")),
+                None => Err("expected in or out".into()),
             }
         };
         let mut out = String::new();
@@ -527,7 +585,9 @@ impl Simulator {
             ["run", n] => {
                 let n: u64 = n
                     .parse()
-                    .map_err(|_| format!("run takes a number of cycles, got {n}"))?;
+                    .ok()
+                    .filter(|n| (1..=RUN_MAX).contains(n))
+                    .ok_or_else(|| format!("run takes 1 to {RUN_MAX} cycles, got {n}"))?;
                 let (done, why) = self.run(n);
                 let _ = writeln!(
                     out,
@@ -546,7 +606,7 @@ impl Simulator {
             }
             ["cont"] | ["continue"] => {
                 // Continuous, bounded so a script without breakpoints ends: one simulated hour.
-                let (done, why) = self.run(72_000);
+                let (done, why) = self.run(CONT_MAX);
                 let _ = writeln!(
                     out,
                     "ran {done} cycle(s){}",
@@ -591,25 +651,22 @@ impl Simulator {
             }
             ["show"] => out.push_str(&self.show()),
             ["spool"] => {
-                let waiting: Vec<String> = self
-                    .program
-                    .spool
-                    .iter()
-                    .map(|r| format!("{r:?}"))
-                    .collect();
+                let waiting: Vec<String> =
+                    self.program.spool.iter().map(ToString::to_string).collect();
                 let _ = writeln!(
                     out,
                     "spool: {} waiting [{}], {} run, {} refused",
                     waiting.len(),
-                    waiting.join(", "),
-                    self.reports.len(),
+                    waiting.join("; "),
+                    self.reports_run,
                     self.program.spool_refused
                 );
             }
             ["stats"] => out.push_str(&self.stats()),
+            ["help"] => out.push_str(HELP),
             _ => {
                 return Err(format!(
-                    "unknown command: {line:?} (run N, step, cont, break …, clear breaks, force …, unforce …, show, spool, stats, quit)"
+                    "unknown command '{line}' (help lists the commands)"
                 ));
             }
         }
@@ -664,7 +721,7 @@ impl Simulator {
             t.bad_passed,
             t.good_rejected,
             t.jams,
-            self.reports.len()
+            self.reports_run
         )
     }
 }

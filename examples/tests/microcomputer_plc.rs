@@ -36,7 +36,7 @@ fn demonstration_sorts_parts_and_reports() {
         .collect();
     assert!(
         log.iter()
-            .any(|l| l.contains("breakpoint OutputOn(1) reached")),
+            .any(|l| l.contains("breakpoint reached: output 1 came on")),
         "{log:?}"
     );
     assert!(log.iter().any(|l| l.contains("jam    1")));
@@ -77,7 +77,7 @@ fn script_with_forcing_steps_and_breakpoints() {
         text.contains("motor  0"),
         "STOP forced: the motor is off\n{text}"
     );
-    assert!(text.contains("breakpoint Cycle(40) reached"));
+    assert!(text.contains("breakpoint reached: cycle 40"), "{text}");
     let picture = std::fs::read_to_string(&svg).unwrap();
     assert!(picture.contains("in  stop") && picture.contains("out motor"));
     std::fs::remove_dir_all(&dir).unwrap();
@@ -346,4 +346,83 @@ fn modbus_with_pymodbus() {
         log.contains("force input 0 on") && log.contains("force output 2 on"),
         "{log}"
     );
+}
+
+/// The monitor as an operator uses it: help, bounds stated, breakpoints passed with cont, no
+/// Rust debug formatting anywhere in what it prints.
+#[test]
+fn monitor_commands_behave_like_a_monitor() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_microcomputer-plc"))
+        .args(["--interactive", "--no-svg"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"help\nrun 99999999999\nbreak out motor on\ncont\ncont\nspool\nbogus\nquit\n")
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("force in|out POINT on|off"),
+        "help lists the commands\n{text}"
+    );
+    assert!(
+        text.contains("run takes 1 to 1000000 cycles, got 99999999999"),
+        "{text}"
+    );
+    // cont stops where the motor comes on, then moves past it to the next time it comes on.
+    let stops: Vec<&str> = text
+        .lines()
+        .filter(|l| l.contains("output 0 came on"))
+        .collect();
+    assert_eq!(stops.len(), 2, "{text}");
+    assert!(
+        text.contains("unknown command 'bogus' (help lists the commands)"),
+        "{text}"
+    );
+    for debug in [
+        "Some(",
+        "Batch(",
+        "Shift(",
+        "OutputOn(",
+        "Cycle(",
+        "ForceOutput(",
+    ] {
+        assert!(!text.contains(debug), "debug formatting {debug}: {text}");
+    }
+}
+
+#[test]
+fn options_are_parsed_like_the_other_programs() {
+    let err = |args: &[&str]| String::from_utf8(plc(args).stderr).unwrap();
+    assert!(err(&["--seed", "-1"]).contains("invalid value '-1' for '--seed"));
+    assert!(err(&["--seconds", "5"]).contains("--seconds only applies with --modbus"));
+    assert!(err(&["--window", "0"]).contains("window must be between 1 and 100000"));
+}
+
+/// The default picture shows what the program is for: a reject-gate opening, with cycle ticks.
+#[test]
+fn default_timing_diagram_shows_the_gate() {
+    let dir = std::env::temp_dir().join(format!("regler-plc-gate-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let svg = dir.join("d.svg");
+    for seed in ["1989", "42", "7"] {
+        let out = plc(&["--quiet", "--seed", seed, "--svg", svg.to_str().unwrap()]);
+        assert!(out.status.success());
+        let picture = std::fs::read_to_string(&svg).unwrap();
+        assert!(
+            picture.contains("the reject gate last opened in cycle"),
+            "seed {seed}"
+        );
+        assert!(
+            picture.contains("text-anchor=\"middle\" font-size=\"10\""),
+            "ticks"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }

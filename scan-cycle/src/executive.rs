@@ -80,7 +80,7 @@ impl fmt::Display for Halt {
         match self {
             Halt::PowerFail => f.write_str("power failure: outputs safe, state frozen"),
             Halt::Watchdog => f.write_str("watchdog tripped: outputs safe"),
-            Halt::Breakpoint(b) => write!(f, "breakpoint {b:?} reached"),
+            Halt::Breakpoint(b) => write!(f, "breakpoint reached: {b}"),
         }
     }
 }
@@ -142,6 +142,17 @@ impl<const IW: usize, const OW: usize> Supervision<IW> for Signals<IW, OW> {
     }
     fn kick(&self, now_us: u32) {
         Signals::kick(self, now_us);
+    }
+}
+
+impl fmt::Display for Breakpoint {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Breakpoint::Cycle(n) => write!(f, "cycle {n}"),
+            Breakpoint::InputOn(p) => write!(f, "input {p} came on"),
+            Breakpoint::OutputOn(p) => write!(f, "output {p} came on"),
+            Breakpoint::OutputOff(p) => write!(f, "output {p} went off"),
+        }
     }
 }
 

@@ -23,7 +23,7 @@ use serde::Serialize;
 /// clear breaks, force in|out POINT 0|1, unforce in|out POINT, show, spool, stats, quit. Points
 /// are numbers or names (start, stop, part, bad, reset; motor, jam, gate, run).
 #[derive(Debug, Parser)]
-#[command(name = "microcomputer-plc", version)]
+#[command(name = "microcomputer-plc", version, allow_negative_numbers = true)]
 struct Args {
     /// Monitor commands, one a line (default: a built-in demonstration).
     #[arg(long)]
@@ -36,9 +36,9 @@ struct Args {
     /// 1000.. force inputs, input registers = counters, holding register 0 ← 1 releases all forces.
     #[arg(long)]
     modbus: Option<String>,
-    /// With --modbus: seconds to run before stopping.
-    #[arg(long, default_value_t = 30.0)]
-    seconds: f64,
+    /// With --modbus: seconds to run before stopping (it is an error without --modbus).
+    #[arg(long)]
+    seconds: Option<f64>,
     /// Seed of the plant.
     #[arg(long, default_value_t = 1989)]
     seed: u64,
@@ -58,7 +58,7 @@ struct Args {
         default_value = "start,part,bad,motor,jam,gate"
     )]
     signals: Vec<String>,
-    /// Cycles shown in the timing diagram (the last ones).
+    /// Cycles shown in the timing diagram (the last ones, at most 100000).
     #[arg(long, default_value_t = 400)]
     window: usize,
     /// Only the summary.
@@ -74,7 +74,7 @@ struct Summary {
     tally: plc::Tally,
     stats: regler_scan_cycle::CycleStats,
     load_per_mille: u32,
-    reports_run: usize,
+    reports_run: u64,
     spool_waiting: usize,
     forced_inputs: Vec<(usize, bool)>,
     forced_outputs: Vec<(usize, bool)>,
@@ -94,19 +94,29 @@ fn run(args: &Args) -> Result<(), String> {
             ));
         }
     }
-    if args.window == 0 {
-        return Err("window must be at least 1 cycle".into());
+    if !(1..=plc::TRACE_CAP).contains(&args.window) {
+        return Err(format!(
+            "window must be between 1 and {} cycles, got {}",
+            plc::TRACE_CAP,
+            args.window
+        ));
+    }
+    if args.seconds.is_some() && args.modbus.is_none() {
+        return Err("--seconds only applies with --modbus (the real-time server)".into());
     }
     let mut sim = Simulator::new(args.seed);
     let mut log = Vec::new();
     if let Some(address) = &args.modbus {
-        if !(args.seconds.is_finite() && args.seconds > 0.0) {
-            return Err(format!("seconds must be > 0, got {}", args.seconds));
+        let seconds = args.seconds.unwrap_or(30.0);
+        if !(seconds.is_finite() && seconds > 0.0 && seconds <= 86_400.0) {
+            return Err(format!(
+                "seconds must be between 0 and 86400, got {seconds}"
+            ));
         }
         serve(
             &mut sim,
             address,
-            args.seconds,
+            seconds,
             &mut log,
             !args.quiet && !args.json,
         )?;
@@ -123,7 +133,7 @@ fn run(args: &Args) -> Result<(), String> {
         };
         let echo = !args.quiet && !args.json;
         for (n, line) in commands.iter().enumerate() {
-            if !execute(&mut sim, line, echo, &mut log)
+            if !execute(&mut sim, line, echo, true, &mut log)
                 .map_err(|e| format!("script line {}: {e}", n + 1))?
             {
                 break;
@@ -131,18 +141,26 @@ fn run(args: &Args) -> Result<(), String> {
         }
         if args.interactive {
             let stdin = std::io::stdin();
-            if stdin.is_terminal() {
-                eprintln!(
-                    "monitor> (run N, step, cont, break …, force …, show, spool, stats, quit)"
-                );
+            // At a terminal the operator sees what they typed: no echo, a prompt instead.
+            let terminal = stdin.is_terminal();
+            let prompt = || {
+                if terminal {
+                    eprint!("monitor> ");
+                    let _ = std::io::stderr().flush();
+                }
+            };
+            if terminal {
+                eprintln!("microcomputer-plc monitor: 'help' lists the commands, 'quit' ends.");
             }
+            prompt();
             for line in stdin.lock().lines() {
                 let line = line.map_err(|e| e.to_string())?;
-                match execute(&mut sim, &line, !args.json, &mut log) {
+                match execute(&mut sim, &line, !args.json, !terminal, &mut log) {
                     Ok(true) => {}
                     Ok(false) => break,
                     Err(e) => println!("? {e}"),
                 }
+                prompt();
             }
         }
     }
@@ -159,7 +177,7 @@ fn run(args: &Args) -> Result<(), String> {
             tally: sim.plant.tally,
             stats: st,
             load_per_mille: st.load_per_mille(sim.plc.config().period_us),
-            reports_run: sim.reports.len(),
+            reports_run: sim.reports_run,
             spool_waiting: sim.program.spool.len(),
             forced_inputs: sim.plc.forced_inputs().iter().collect(),
             forced_outputs: sim.plc.forced_outputs().iter().collect(),
@@ -182,7 +200,8 @@ fn run(args: &Args) -> Result<(), String> {
 fn execute(
     sim: &mut Simulator,
     line: &str,
-    echo: bool,
+    print: bool,
+    echo_command: bool,
     log: &mut Vec<String>,
 ) -> Result<bool, String> {
     let line = line.split('#').next().unwrap_or("").trim();
@@ -193,8 +212,10 @@ fn execute(
         return Ok(false);
     }
     let out = sim.command(line)?;
-    if echo {
-        println!("> {line}");
+    if print {
+        if echo_command {
+            println!("> {line}");
+        }
         print!("{out}");
     }
     log.push(format!("> {line}"));
@@ -595,18 +616,69 @@ fn writes_holding(buf: &[u8], register: u16) -> bool {
 
 /// A timing diagram of the chosen signals over the last `window` cycles.
 fn timing_diagram(sim: &Simulator, signals: &[String], window: usize) -> String {
-    let trace = &sim.trace[sim.trace.len().saturating_sub(window)..];
+    // The reject gate is what the program is for: the window ends a quarter of its width after
+    // the last time the gate opened, so the bad part, the gate and its timing are in the picture.
+    let gate = SIGNALS
+        .iter()
+        .find(|(name, ..)| *name == "gate")
+        .map_or(2, |&(_, _, p)| p);
+    let opened =
+        |a: &plc::Sample, b: &plc::Sample| a.outputs >> gate & 1 == 0 && b.outputs >> gate & 1 == 1;
+    let all: Vec<plc::Sample> = sim.trace.iter().copied().collect();
+    let last_opening = all
+        .windows(2)
+        .rposition(|w| opened(&w[0], &w[1]))
+        .map(|i| i + 1);
+    let end = match last_opening {
+        Some(i) => (i + window / 4 + 1)
+            .min(all.len())
+            .max(window.min(all.len())),
+        None => all.len(),
+    };
+    let trace = &all[end.saturating_sub(window)..end];
+    let caption = match last_opening.map(|i| all[i].cycle) {
+        Some(c) => format!(
+            "Timing diagram, cycles {}–{} (the reject gate last opened in cycle {c})",
+            trace.first().map_or(0, |s| s.cycle),
+            trace.last().map_or(0, |s| s.cycle)
+        ),
+        None => format!(
+            "Timing diagram, cycles {}–{} (the reject gate did not open)",
+            trace.first().map_or(0, |s| s.cycle),
+            trace.last().map_or(0, |s| s.cycle)
+        ),
+    };
     let (left, row, top) = (80.0, 34.0, 40.0);
     let width = 900.0;
     let plot = width - left - 20.0;
-    let height = top + row * signals.len() as f64 + 40.0;
+    let height = top + row * signals.len() as f64 + 52.0;
     let mut svg = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width}\" height=\"{height}\" font-family=\"monospace\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n<text x=\"{}\" y=\"22\" text-anchor=\"middle\" font-size=\"15\" font-family=\"sans-serif\">Timing diagram, cycles {}–{}</text>\n",
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width}\" height=\"{height}\" font-family=\"monospace\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n<text x=\"{}\" y=\"22\" text-anchor=\"middle\" font-size=\"15\" font-family=\"sans-serif\">{caption}</text>\n",
         width / 2.0,
-        trace.first().map_or(0, |s| s.cycle),
-        trace.last().map_or(0, |s| s.cycle)
     );
     let n = trace.len().max(1) as f64;
+    // Cycle ticks: about eight, at round cycle numbers.
+    if let (Some(first), Some(last)) = (trace.first(), trace.last()) {
+        let span = (last.cycle - first.cycle).max(1);
+        let raw = span as f64 / 8.0;
+        let magnitude = 10f64.powf(raw.log10().floor());
+        let step = [1.0, 2.0, 5.0, 10.0]
+            .iter()
+            .map(|m| m * magnitude)
+            .find(|s| *s >= raw)
+            .unwrap_or(raw)
+            .max(1.0) as u64;
+        let axis = top + row * signals.len() as f64 + 4.0;
+        let mut c = first.cycle.div_ceil(step) * step;
+        while c <= last.cycle {
+            let x = left + plot * (c - first.cycle) as f64 / n;
+            svg.push_str(&format!(
+                "<line x1=\"{x:.1}\" x2=\"{x:.1}\" y1=\"{top}\" y2=\"{axis:.1}\" stroke=\"#eee\"/><text x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"middle\" font-size=\"10\">{c}</text>\n",
+                axis + 12.0
+            ));
+            c += step;
+        }
+    }
     for (k, name) in signals.iter().enumerate() {
         let Some(&(_, input, point)) = SIGNALS.iter().find(|(s, ..)| s == name) else {
             continue;
@@ -643,8 +715,9 @@ fn timing_diagram(sim: &Simulator, signals: &[String], window: usize) -> String 
         ));
     }
     svg.push_str(&format!(
-        "<text x=\"{left}\" y=\"{:.1}\" font-family=\"sans-serif\">one column = one {PERIOD_MS} ms cycle; blue inputs, red outputs</text>\n</svg>\n",
-        height - 12.0
+        "<text x=\"{left}\" y=\"{:.1}\" font-family=\"sans-serif\">x: cycle number ({PERIOD_MS} ms each, {} cycles shown); blue inputs, red outputs; high = on</text>\n</svg>\n",
+        height - 8.0,
+        trace.len()
     ));
     svg
 }
