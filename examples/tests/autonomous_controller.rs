@@ -34,7 +34,19 @@ fn json(args: &[&str]) -> Value {
 fn demonstration_controls_the_room_and_reports() {
     let r = json(&["--hours", "48"]);
     assert_eq!(r["faults"], "no fault");
-    assert_eq!(r["commits_s"].as_array().unwrap().len(), 3);
+    // Commits at 4 h (keypad) and 40 h (change mode); the D at 5 h had nothing staged.
+    let commits: Vec<f64> = r["commits_s"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(commits, [14_400.0, 144_000.0]);
+    let shown = r["shown"].to_string();
+    assert!(
+        shown.contains("ILLEGAL VALUE"),
+        "the refused KP stays visible"
+    );
     // The run is deterministic: its figures are pinned (a change of controller, plant or
     // script that moves them must say so here).
     assert_eq!(r["alarms"].as_u64(), Some(4));
@@ -200,5 +212,36 @@ fn help() {
         "--outdoor-compensation",
     ] {
         assert!(help.contains(option), "{option}");
+    }
+}
+
+/// Each interface has a demonstration of its own: the keypad sets the controller up by keys
+/// (no WRONG COMMAND from terminal answers typed on keys), and the tank, commissioned with a pump
+/// sized for its outflow, holds its set-point without sitting at 10 V.
+#[test]
+fn each_interface_and_process_has_a_demonstration_that_controls() {
+    for args in [
+        &["--interface", "keypad"][..],
+        &["--process", "tank"],
+        &["--process", "tank", "--interface", "keypad"],
+    ] {
+        let r = json(&[args, &["--hours", "2"]].concat());
+        let shown = r["shown"].to_string();
+        assert!(!shown.contains("WRONG"), "{args:?}: {shown}");
+        let trace = r["trace"].as_array().unwrap();
+        let at_top = trace
+            .iter()
+            .filter(|p| p["output"].as_f64().unwrap() >= 9.99)
+            .count();
+        assert!(
+            at_top * 20 < trace.len(),
+            "{args:?}: output at 10 V {at_top} of {}",
+            trace.len()
+        );
+        let last = &trace[trace.len() - 1];
+        let error =
+            (last["setpoint"].as_f64().unwrap() - last["measurement"].as_f64().unwrap()).abs();
+        assert!(error < 1.0, "{args:?}: {error}");
+        assert_eq!(r["faults"], "no fault");
     }
 }

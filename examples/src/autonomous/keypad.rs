@@ -83,6 +83,8 @@ pub enum KeyEffect {
 pub struct Keypad {
     state: State,
     lcd: Lcd,
+    /// The last parameter staged, shown with its new value after the commit.
+    last_staged: Option<Code>,
 }
 
 impl Default for Keypad {
@@ -98,6 +100,7 @@ impl Keypad {
         Keypad {
             state: State::Display,
             lcd: Lcd::default(),
+            last_staged: None,
         }
     }
 
@@ -155,6 +158,13 @@ impl Keypad {
                 self.state = State::Code(digits);
                 KeyEffect::None
             }
+            // `*` starts a code from the display; at "CODE=?" with nothing keyed it does the same
+            // (an operator starting the next parameter as they started the first).
+            (State::Code(digits), '*') if digits.is_empty() => {
+                self.lcd.set(None, "CODE=?".into());
+                self.state = State::Code(digits);
+                KeyEffect::None
+            }
             (State::Code(digits), '*') => {
                 match digits.parse::<u8>().ok().and_then(Code::from_number) {
                     Some(code) => {
@@ -176,9 +186,19 @@ impl Keypad {
                 KeyEffect::None
             }
             (State::Code(_) | State::Shown(_), 'D') => {
-                station.staged_mut().commit();
                 self.state = State::Display;
-                self.lcd.set(None, String::new());
+                if !station.staged().edited() {
+                    // Nothing staged: back to the display, no commit.
+                    self.lcd.set(None, String::new());
+                    return KeyEffect::None;
+                }
+                station.staged_mut().commit();
+                // The value that will be in force from the next sample.
+                let upper = self
+                    .last_staged
+                    .map(|code| staged_value(code, station))
+                    .unwrap_or_default();
+                self.lcd.set(Some(upper), "COMMITTED".into());
                 KeyEffect::Committed
             }
             _ => {
@@ -201,7 +221,9 @@ impl Keypad {
         self.state = State::Code(String::new());
         match result {
             Ok(()) => {
-                self.lcd.set(None, "CODE=?".into());
+                self.lcd
+                    .set(Some(staged_value(code, station)), "CODE=?".into());
+                self.last_staged = Some(code);
                 KeyEffect::Staged(code)
             }
             Err(e) => {
@@ -259,6 +281,25 @@ fn shown_value<T: Scalar>(code: Code, station: &Station<T>) -> String {
         Some(v) => format!("{}={}", code.name(), trim(v)),
         None => format!("{}=?", code.name()),
     }
+}
+
+/// The upper line for a staged parameter: the value the shadow set holds for it.
+fn staged_value<T: Scalar>(code: Code, station: &Station<T>) -> String {
+    let p = station.staged().shadow();
+    let value = match code {
+        Code::Typ => return format!("TYP={}", p.config.kind),
+        Code::Win => p.setpoint,
+        Code::S => p.config.h,
+        Code::Rfel => p.rfel,
+        Code::Kp => p.config.k,
+        Code::Td => p.config.td,
+        Code::Ti => p.config.ti,
+        Code::Ymin => p.config.ymin,
+        Code::Ymax => p.config.ymax,
+        Code::Dymax => p.config.dymax.unwrap_or(0.0),
+        Code::Y | Code::Xin => return format!("{}=?", code.name()),
+    };
+    format!("{}={}", code.name(), trim(value))
 }
 
 /// A number as the LCD shows it: at most three decimals, no trailing zeros.

@@ -8,8 +8,9 @@
 //!   which follows a daily sine (mean `outdoor_mean`, ±5 °C) plus seeded weather noise.
 //!   Scale 0–40 °C.
 //! - **tank**: a tank level fed by a 0–10 V pump, first-order, time constant 30 s, no dead time;
-//!   10 V holds 100 % with the outflow valve shut; the valve moves every five minutes
-//!   (a seeded random walk, 0–30 % of the inflow range).
+//!   10 V would hold 150 % with the outflow valve shut (the pump sized for the largest outflow
+//!   with margin); the valve moves every five minutes (a seeded random walk, 0–30 % of the
+//!   inflow range).
 //!   Scale 0–100 %.
 //!
 //! The measurement goes through the source's 12-bit A/D and the output through its 8-bit D/A.
@@ -19,7 +20,7 @@
 //! unit `90s`, `15m`, `2h`, or a clock time `hh:mm`. KIND is
 //! - `term TEXT`: a line typed at the terminal (start-up answers, `Y` for the change mode, `C`);
 //!   `term` alone is an empty line (CR);
-//! - `keys KEYS`: keys pressed on the keypad, e.g. `keys * 21 * A 150 A D`;
+//! - `keys KEYS`: keys pressed on the keypad, e.g. `keys * 21 * A 22 A D` (set-point 22 on the room's 0–40 °C scale; the source's own example keyed 150 on its scale);
 //! - `night on|off`: the night input (set-back);
 //! - `outdoor DELTA`: a step in the outdoor temperature (room) or outflow (tank), in scale units.
 
@@ -152,12 +153,16 @@ fn parse_time(s: &str) -> Option<f64> {
     (value.is_finite() && value >= 0.0).then_some(value)
 }
 
-/// The script used when none is given: a start-up at the terminal, a set-point change on the
-/// keypad, a night set-back, an outdoor cold snap and a retune in the change mode.
+/// The script used when none is given, one for each way of operating the controller.
+///
+/// At the terminal: the start-up dialogue, a set-point change on the keypad, an illegal value,
+/// the alarm acknowledged, a night set-back, a disturbance and a retune in the change mode. On
+/// the keypad alone: every parameter keyed in from the source's keypad start-up values, then the
+/// same day of operation on the keys.
 #[must_use]
-pub fn demo_script(process: ProcessKind) -> &'static str {
-    match process {
-        ProcessKind::Room => {
+pub fn demo_script(process: ProcessKind, interface: Interface) -> &'static str {
+    match (process, interface) {
+        (ProcessKind::Room, Interface::Terminal) => {
             "# start-up dialogue at the terminal
 0 term PID
 0 term 10       # S
@@ -173,9 +178,9 @@ pub fn demo_script(process: ProcessKind) -> &'static str {
 0 term 1.5      # RFEL
 0 term 20       # WIN
 0 term
-# the keypad: WIN 20 -> 22, as the source's example
+# the keypad: WIN 20 -> 22 (the source's example keyed 150 on its own scale)
 4h keys * 21 * A 22 A D
-# an illegal value, then the alarm acknowledged
+# an illegal value stays on the LCD; D with nothing staged is no commit
 5h keys * 51 * A 20000 A
 5h keys D
 6h term C
@@ -194,7 +199,26 @@ pub fn demo_script(process: ProcessKind) -> &'static str {
 40h term Q
 "
         }
-        ProcessKind::Tank => {
+        (ProcessKind::Room, Interface::Keypad) => {
+            "# the keypad alone: from its start-up values (PID, K 10, Ti 8 s, 1 s, WIN 0) to a room
+0 keys * 31 * A 10 A         # S 10 s
+0 keys * 51 * A 2 A          # KP 2
+0 keys * 71 * A 900 A        # TI 900 s
+0 keys * 61 * A 60 A         # TD 60 s
+0 keys * 83 * A 0.5 A        # DYMAX 0.5 V a sample
+0 keys * 41 * A 1.5 A        # RFEL 1.5
+0 keys * 21 * A 20 A D       # WIN 20, and commit them all at the next sample
+4h keys * 21 * A 22 A D
+5h keys * 51 * A 20000 A     # ILLEGAL VALUE stays on the LCD
+5h keys D                    # nothing staged: no commit
+6h keys C                    # acknowledge the alarm
+22:00 night on
+30:00 night off
+36h outdoor -8
+40h keys * 51 * A 3 A * 71 * A 1200 A D
+"
+        }
+        (ProcessKind::Tank, Interface::Terminal) => {
             "0 term PI
 0 term 1        # S
 0 term 0
@@ -208,6 +232,18 @@ pub fn demo_script(process: ProcessKind) -> &'static str {
 0 term 5        # RFEL
 0 term 50       # WIN
 0 term
+10m keys * 21 * A 70 A D
+20m outdoor 10
+30m keys * 10 * A P I D A * 61 * A 1 A D
+"
+        }
+        (ProcessKind::Tank, Interface::Keypad) => {
+            "# the keypad alone: a PI for the tank from the keypad start-up values
+0 keys * 10 * A P I A        # TYP PI
+0 keys * 51 * A 1.5 A        # KP 1.5
+0 keys * 71 * A 40 A         # TI 40 s
+0 keys * 41 * A 5 A          # RFEL 5 %
+0 keys * 21 * A 50 A D       # WIN 50 %, commit
 10m keys * 21 * A 70 A D
 20m outdoor 10
 30m keys * 10 * A P I D A * 61 * A 1 A D
@@ -290,6 +326,10 @@ pub struct SimReport {
 
 /// Room heater: degrees above outdoor per volt at steady state.
 const HEATER_GAIN: f64 = 4.0;
+/// Tank level, %, that 1 V of pump holds against a shut outflow valve: the pump is sized for
+/// the largest outflow (30 % of the inflow range, plus disturbances) with margin, as one would
+/// commission it, so the loop controls instead of saturating at 10 V.
+const PUMP_GAIN: f64 = 15.0;
 
 struct Plant {
     kind: ProcessKind,
@@ -344,7 +384,7 @@ impl Plant {
                 if (t / 300.0).fract() < dt / 300.0 {
                     self.noise = (self.noise + self.rng.random_range(-2.0..2.0)).clamp(0.0, 30.0);
                 }
-                let target = 10.0 * applied - self.disturbance - self.noise;
+                let target = PUMP_GAIN * applied - self.disturbance - self.noise;
                 self.x += dt * (target - self.x) / 30.0;
                 self.x = self.x.clamp(0.0, 100.0);
             }
@@ -523,17 +563,26 @@ fn apply(
             }
         }
         Input::Keys(sequence) => {
-            let mut messages = Vec::new();
+            // The screen after every key that showed a message stays in the transcript: a
+            // refused entry is seen even when more keys follow on the same line.
+            let mut pressed = String::new();
             for key in keypad::keys(sequence) {
-                if let KeyEffect::Message(m) = keypad.press(key, station) {
-                    messages.push(m);
+                pressed.push(key);
+                pressed.push(' ');
+                if let KeyEffect::Message(_) = keypad.press(key, station) {
+                    shown.push(Shown {
+                        t_s,
+                        text: format!("keys: {}\n{}", pressed.trim_end(), keypad.lcd().render()),
+                    });
+                    pressed.clear();
                 }
             }
-            shown.push(Shown {
-                t_s,
-                text: format!("keys: {sequence}\n{}", keypad.lcd().render()),
-            });
-            let _ = messages;
+            if !pressed.is_empty() {
+                shown.push(Shown {
+                    t_s,
+                    text: format!("keys: {}\n{}", pressed.trim_end(), keypad.lcd().render()),
+                });
+            }
         }
         Input::Night(on) => {
             station.set_night(*on);

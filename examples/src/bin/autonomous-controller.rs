@@ -88,6 +88,10 @@ fn run(args: &Args) -> Result<(), String> {
         ProcessArg::Room => ProcessKind::Room,
         ProcessArg::Tank => ProcessKind::Tank,
     };
+    let interface = match args.interface {
+        InterfaceArg::Terminal => Interface::Terminal,
+        InterfaceArg::Keypad => Interface::Keypad,
+    };
     let script = match (&args.script, args.interactive) {
         (Some(_), true) => return Err("--script and --interactive exclude each other".into()),
         (Some(path), false) => {
@@ -96,16 +100,13 @@ fn run(args: &Args) -> Result<(), String> {
             parse_script(&text)?
         }
         (None, true) => interactive_script(args)?,
-        (None, false) => parse_script(autonomous::demo_script(process))?,
+        (None, false) => parse_script(autonomous::demo_script(process, interface))?,
     };
     let config = SimConfig {
         process,
         seed: args.seed,
         hours: args.hours,
-        interface: match args.interface {
-            InterfaceArg::Terminal => Interface::Terminal,
-            InterfaceArg::Keypad => Interface::Keypad,
-        },
+        interface,
         night_setback: args.night_setback,
         outdoor_compensation: args.outdoor_compensation,
         outdoor_mean: args.outdoor_mean,
