@@ -245,3 +245,53 @@ fn each_interface_and_process_has_a_demonstration_that_controls() {
         assert_eq!(r["faults"], "no fault");
     }
 }
+
+/// Values no plant has are refused with a message that says what and why.
+#[test]
+fn absurd_values_are_refused() {
+    let dir = std::env::temp_dir().join(format!("regler-auto-absurd-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let script = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let (far, huge) = (
+        script("far", "1e30 night on\n"),
+        script("huge", "0 outdoor 1e300\n"),
+    );
+    for (args, needle) in [
+        (
+            vec!["--outdoor-mean", "1e9"],
+            "outdoor-mean must be between -50 and 50",
+        ),
+        (
+            vec!["--outdoor-mean", "-300"],
+            "outdoor-mean must be between -50 and 50",
+        ),
+        (
+            vec!["--night-setback", "1e9"],
+            "night-setback must be between 0 and the scale's span (40)",
+        ),
+        (
+            vec!["--hours", "0"],
+            "hours must be more than 0 and at most 8760",
+        ),
+        (
+            vec!["--interface", "keypad", "--script", &far],
+            "within a year",
+        ),
+        (
+            vec!["--interface", "keypad", "--script", &huge],
+            "an outdoor step must be within ±40",
+        ),
+    ] {
+        let out = controller(&[&args[..], &["--no-svg"]].concat());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(needle),
+            "{args:?}: {err}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -227,10 +227,7 @@ impl Keypad {
                 KeyEffect::Staged(code)
             }
             Err(e) => {
-                let message = match e {
-                    EditError::NotANumber(_) => "ILLEGAL VALUE",
-                    other => other.display_message(),
-                };
+                let message = e.display_message();
                 self.lcd.set(None, message.into());
                 KeyEffect::Message(message)
             }
@@ -240,20 +237,73 @@ impl Keypad {
 
 /// Stages an operator's entry for `code`: a controller type (P, PI, …) for TYP, a number for the
 /// others. The keypad and the terminal both enter values this way.
-pub fn stage<T: Scalar>(station: &mut Station<T>, code: Code, text: &str) -> Result<(), EditError> {
+pub fn stage<T: Scalar>(
+    station: &mut Station<T>,
+    code: Code,
+    text: &str,
+) -> Result<(), StageError> {
     if code == Code::Typ {
-        let kind = Kind::parse(text).ok_or(EditError::NotANumber(code))?;
-        return station.staged_mut().edit_kind(kind);
+        let kind = Kind::parse(text).ok_or(StageError::Edit(EditError::NotANumber(code)))?;
+        return station
+            .staged_mut()
+            .edit_kind(kind)
+            .map_err(StageError::Edit);
     }
     let value = text
         .trim()
         .parse::<f64>()
-        .map_err(|_| EditError::IllegalValue {
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| StageError::NotANumber {
             code,
-            value: f64::NAN,
-            requirement: regler_pid::Requirement::Finite,
+            typed: text.trim().to_string(),
         })?;
-    station.staged_mut().edit(code, value)
+    station
+        .staged_mut()
+        .edit(code, value)
+        .map_err(StageError::Edit)
+}
+
+/// Why an entry was refused: the crate's reason, or text that is no number at all.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StageError {
+    /// The station refused the value.
+    Edit(EditError),
+    /// What was typed is not a number.
+    NotANumber {
+        /// The parameter.
+        code: Code,
+        /// What the operator typed.
+        typed: String,
+    },
+}
+
+impl StageError {
+    /// The source's message for the LCD.
+    #[must_use]
+    pub fn display_message(&self) -> &'static str {
+        match self {
+            StageError::Edit(EditError::NotANumber(_)) | StageError::NotANumber { .. } => {
+                "ILLEGAL VALUE"
+            }
+            StageError::Edit(e) => e.display_message(),
+        }
+    }
+}
+
+impl std::fmt::Display for StageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StageError::Edit(e) => e.fmt(f),
+            StageError::NotANumber { code, typed } => {
+                write!(
+                    f,
+                    "ILLEGAL VALUE: {} must be a number, got '{typed}'",
+                    code.name()
+                )
+            }
+        }
+    }
 }
 
 /// Keys that belong to an entry: P, I, D for TYP; digits, '.' and '-' for numbers.

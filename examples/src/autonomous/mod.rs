@@ -106,15 +106,15 @@ pub fn parse_script(text: &str) -> Result<Vec<Event>, String> {
         if line.trim().is_empty() {
             continue;
         }
-        let err = |what: &str| format!("script line {}: {what}: {raw:?}", n + 1);
+        let err = |what: &str| format!("script line {}: {what}: '{}'", n + 1, raw.trim());
         let mut parts = line.trim_start().splitn(3, char::is_whitespace);
         let time = parts.next().ok_or_else(|| err("missing time"))?;
         let kind = parts
             .next()
             .ok_or_else(|| err("missing command (term, keys, night, outdoor)"))?;
         let rest = parts.next().unwrap_or("").trim();
-        let t_s =
-            parse_time(time).ok_or_else(|| err("bad time (use 600, 90s, 15m, 2h or hh:mm)"))?;
+        let t_s = parse_time(time)
+            .ok_or_else(|| err("bad time (use 600, 90s, 15m, 2h or hh:mm, within a year)"))?;
         let input = match kind {
             "term" => Input::Term(rest.to_string()),
             "keys" => Input::Keys(rest.to_string()),
@@ -137,6 +137,9 @@ pub fn parse_script(text: &str) -> Result<Vec<Event>, String> {
     Ok(events)
 }
 
+/// Script times end at a year, the longest run.
+const LAST_SCRIPT_S: f64 = 8760.0 * 3600.0;
+
 fn parse_time(s: &str) -> Option<f64> {
     let value = if let Some((h, m)) = s.split_once(':') {
         let (h, m) = (h.parse::<f64>().ok()?, m.parse::<f64>().ok()?);
@@ -150,7 +153,7 @@ fn parse_time(s: &str) -> Option<f64> {
     } else {
         s.parse::<f64>().ok()?
     };
-    (value.is_finite() && value >= 0.0).then_some(value)
+    (value.is_finite() && (0.0..=LAST_SCRIPT_S).contains(&value)).then_some(value)
 }
 
 /// The script used when none is given, one for each way of operating the controller.
@@ -396,18 +399,32 @@ impl Plant {
 pub fn run(config: &SimConfig, mut progress: impl FnMut(f64)) -> Result<SimReport, String> {
     if !(config.hours.is_finite() && config.hours > 0.0 && config.hours <= 24.0 * 365.0) {
         return Err(format!(
-            "hours must be between 0 and 8760, got {}",
+            "hours must be more than 0 and at most 8760 (a year), got {}",
             config.hours
         ));
     }
-    if !(config.night_setback.is_finite() && config.night_setback >= 0.0) {
+    let (scale_lo, scale_hi) = config.process.scale();
+    let span = scale_hi - scale_lo;
+    if !(config.night_setback.is_finite() && (0.0..=span).contains(&config.night_setback)) {
         return Err(format!(
-            "night-setback must be >= 0, got {}",
+            "night-setback must be between 0 and the scale's span ({span}), got {}",
             config.night_setback
         ));
     }
-    if !config.outdoor_mean.is_finite() {
-        return Err("outdoor-mean must be a finite number".into());
+    if !(config.outdoor_mean.is_finite() && (-50.0..=50.0).contains(&config.outdoor_mean)) {
+        return Err(format!(
+            "outdoor-mean must be between -50 and 50 °C (a climate a building is heated in), got {}",
+            config.outdoor_mean
+        ));
+    }
+    for event in &config.script {
+        if let Input::Outdoor(delta) = event.input {
+            if delta.abs() > span {
+                return Err(format!(
+                    "an outdoor step must be within ±{span} (the scale's span), got {delta}"
+                ));
+            }
+        }
     }
     let mut shown: Vec<Shown> = Vec::new();
     let mut events = config.script.iter().peekable();

@@ -162,7 +162,9 @@ impl Terminal {
         }
     }
 
-    /// The first prompt, as printed at power-on.
+    /// The first prompt, as printed at power-on. The spellings `INITIALITION MODE` and `UTYPE`
+    /// are the 1985 program listing's own (TFRT-5323, appendix: the BASIC source), kept as the
+    /// operators saw them.
     #[must_use]
     pub fn banner() -> Vec<String> {
         vec!["INITIALITION MODE".into(), Question::Type.prompt().into()]
