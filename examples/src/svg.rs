@@ -49,7 +49,7 @@ pub fn line_chart(title: &str, x_label: &str, y_label: &str, series: &[Series<'_
 }
 
 /// A line chart with vertical dashed markers at the x values `markers`, labelled `marker_label`
-/// in the legend.
+/// in the legend. The y axis starts at 0.
 #[must_use]
 pub fn line_chart_marked(
     title: &str,
@@ -59,14 +59,69 @@ pub fn line_chart_marked(
     markers: &[f64],
     marker_label: &str,
 ) -> String {
+    chart(
+        title,
+        x_label,
+        y_label,
+        series,
+        markers,
+        marker_label,
+        false,
+    )
+}
+
+/// As [`line_chart_marked`], with the y axis fitted to the data (a round range around it), so
+/// a thin band of values is drawn large enough to read.
+#[must_use]
+pub fn line_chart_fitted(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series<'_>],
+    markers: &[f64],
+    marker_label: &str,
+) -> String {
+    chart(title, x_label, y_label, series, markers, marker_label, true)
+}
+
+/// A round axis range covering `lo..=hi`: five grid steps of 1, 2 or 5 times a power of ten.
+fn nice_range(lo: f64, hi: f64) -> (f64, f64) {
+    if !(lo.is_finite() && hi.is_finite()) {
+        return (0.0, 1.0);
+    }
+    let mut step = nice_ceiling(((hi - lo) / 5.0).max(1e-9));
+    let mut start = (lo / step).floor() * step;
+    // Flooring the start can push the top past five steps: take the next round step then.
+    while start + 5.0 * step < hi {
+        step = nice_ceiling(step * 1.000_001);
+        start = (lo / step).floor() * step;
+    }
+    (start, start + 5.0 * step)
+}
+
+fn chart(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series<'_>],
+    markers: &[f64],
+    marker_label: &str,
+    fit_y: bool,
+) -> String {
     let points = series.iter().flat_map(|s| s.points.iter());
     let x_max = nice_ceiling(points.clone().map(|p| p.0).fold(0.0, f64::max));
-    let y_max = nice_ceiling(points.map(|p| p.1).fold(0.0, f64::max));
+    let (y_min, y_max) = if fit_y {
+        let lo = points.clone().map(|p| p.1).fold(f64::INFINITY, f64::min);
+        let hi = points.map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+        nice_range(lo, hi)
+    } else {
+        (0.0, nice_ceiling(points.map(|p| p.1).fold(0.0, f64::max)))
+    };
     let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
     let sx = |x: f64| LEFT + pw * x / x_max;
-    let sy = |y: f64| TOP + ph * (1.0 - y / y_max);
+    let sy = |y: f64| TOP + ph * (1.0 - (y - y_min) / (y_max - y_min));
     let mut svg = header(title);
-    horizontal_grid(&mut svg, y_max);
+    grid_between(&mut svg, y_min, y_max);
     for i in 0..=5 {
         let fx = x_max * f64::from(i) / 5.0;
         let _ = writeln!(
@@ -107,12 +162,15 @@ pub fn line_chart_marked(
         }
         legend(&mut svg, i, s.label, s.colour, s.dashed);
     }
+    // Markers closer than 5 px are spread apart, so that two commits at once show as two.
+    let mut last_x = f64::NEG_INFINITY;
     for &m in markers {
+        let x = sx(m).max(last_x + 5.0);
+        last_x = x;
         let _ = writeln!(
             svg,
             r##"<line x1="{x:.1}" x2="{x:.1}" y1="{TOP}" y2="{:.1}" stroke="#8e44ad" stroke-dasharray="3 3"/>"##,
             TOP + ph,
-            x = sx(m)
         );
     }
     if !markers.is_empty() {
@@ -182,10 +240,15 @@ pub fn bar_chart(
 
 /// Five horizontal grid lines with their values, 0 to `y_max`.
 fn horizontal_grid(svg: &mut String, y_max: f64) {
+    grid_between(svg, 0.0, y_max);
+}
+
+/// Five horizontal grid lines with their values, `y_min` to `y_max`.
+fn grid_between(svg: &mut String, y_min: f64, y_max: f64) {
     let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
     for i in 0..=5 {
-        let fy = y_max * f64::from(i) / 5.0;
-        let y = TOP + ph * (1.0 - fy / y_max);
+        let fy = y_min + (y_max - y_min) * f64::from(i) / 5.0;
+        let y = TOP + ph * (1.0 - f64::from(i) / 5.0);
         let _ = writeln!(
             svg,
             r##"<line x1="{LEFT}" x2="{:.1}" y1="{y:.1}" y2="{y:.1}" stroke="#ddd"/><text x="{:.1}" y="{:.1}" text-anchor="end">{}</text>"##,
@@ -255,6 +318,14 @@ fn trim(v: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn nice_ranges_cover_the_data_in_five_round_steps() {
+        assert_eq!(nice_range(15.2, 22.4), (14.0, 24.0));
+        assert_eq!(nice_range(0.0, 10.0), (0.0, 10.0));
+        let (a, b) = nice_range(-3.7, 41.0);
+        assert!(a <= -3.7 && b >= 41.0, "{a} {b}");
+    }
 
     #[test]
     fn nice_ceilings() {

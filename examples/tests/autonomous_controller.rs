@@ -140,8 +140,8 @@ fn interactive_terminal_on_stdin() {
             "1",
             "--no-svg",
             "-q",
-            "--step-s",
-            "300",
+            "--speed",
+            "600",
         ])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
@@ -294,4 +294,103 @@ fn absurd_values_are_refused() {
         );
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// An operator at a real terminal (tmux): each question appears before the answer is typed,
+/// replies come at once, and the plant runs while nobody types. `.ci/run` installs tmux and runs
+/// this test.
+#[test]
+#[ignore = "needs tmux (apt-get install tmux); .ci/run runs it"]
+fn interactive_under_tmux_answers_as_the_operator_types() {
+    use std::time::{Duration, Instant};
+    let session = format!("regler-ac-{}", std::process::id());
+    let tmux = |args: &[&str]| {
+        let out = Command::new("tmux").args(args).output().unwrap();
+        String::from_utf8_lossy(&out.stdout).to_string()
+    };
+    let program = format!(
+        "{} --interactive --process tank --hours 2 --no-svg --speed 600",
+        env!("CARGO_BIN_EXE_autonomous-controller")
+    );
+    tmux(&[
+        "new-session",
+        "-d",
+        "-s",
+        &session,
+        "-x",
+        "120",
+        "-y",
+        "50",
+        &program,
+    ]);
+    // Keep the pane after the program ends, to read its summary.
+    tmux(&["set-option", "-t", &session, "remain-on-exit", "on"]);
+    let screen = || tmux(&["capture-pane", "-p", "-t", &session]);
+    let wait_for = |needle: &str| {
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(10) {
+            if screen().contains(needle) {
+                return true;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        false
+    };
+    let type_line = |text: &str| {
+        tmux(&["send-keys", "-t", &session, text, "Enter"]);
+    };
+    // Each question is on the screen before its answer is typed.
+    let dialogue = [
+        ("REGULATOR TYPE", "PI"),
+        ("SAMPLING PERIOD", "1"),
+        ("LOW OUTPUT LIMIT", "0"),
+        ("HIGH OUTPUT LIMIT", "10"),
+        ("MAX DER. OUTPUT", "0"),
+        ("GAIN KP", "1.5"),
+        ("INTEGRATION TIME", "30"),
+        ("SCALE MIN", "0"),
+        ("SCALE MAX", "100"),
+        ("DIRECT OR REVERSE", "DIR"),
+        ("MAX ERROR RFEL", "5"),
+        ("REFERENCE WIN", "50"),
+        ("TO START THE REGULATOR", ""),
+    ];
+    for (question, answer) in dialogue {
+        let ok = wait_for(question);
+        if !ok {
+            tmux(&["kill-session", "-t", &session]);
+        }
+        assert!(ok, "question {question} never appeared:\n{}", screen());
+        type_line(answer);
+    }
+    assert!(wait_for("REGULATOR STARTED"), "{}", screen());
+    // A refused entry is answered at once, while the run goes on.
+    type_line("keys * 21 * A 150 A");
+    assert!(wait_for("ILLEGAL VALUE"), "{}", screen());
+    // Nobody types for a second: at 600 times real time the tank has filled toward 50 %.
+    std::thread::sleep(Duration::from_millis(1200));
+    type_line("");
+    let filled = wait_for("XIN= 4") || wait_for("XIN= 5");
+    let text = screen();
+    type_line("quit");
+    assert!(wait_for("IAE"), "the summary after quit:\n{}", screen());
+    tmux(&["kill-session", "-t", &session]);
+    assert!(filled, "the plant ran meanwhile:\n{text}");
+}
+
+/// The JSON trace is streamed at the chosen resolution: one point per --trace-every seconds,
+/// whatever the run's length, and the document stays valid JSON.
+#[test]
+fn json_trace_has_the_chosen_resolution() {
+    for (every, points) in [("60", 121), ("600", 13)] {
+        let r = json(&["--hours", "2", "--trace-every", every]);
+        assert_eq!(
+            r["trace"].as_array().unwrap().len(),
+            points,
+            "every {every} s"
+        );
+    }
+    let out = controller(&["--trace-every", "0", "--json", "--no-svg"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("trace-every must be more than 0"));
+    assert!(out.stdout.is_empty(), "no half-written JSON on an error");
 }

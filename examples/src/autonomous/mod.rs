@@ -89,6 +89,17 @@ pub enum Input {
     Outdoor(f64),
 }
 
+impl std::fmt::Display for Input {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Input::Term(line) => write!(f, "term {line}"),
+            Input::Keys(keys) => write!(f, "keys {keys}"),
+            Input::Night(on) => write!(f, "night {}", if *on { "on" } else { "off" }),
+            Input::Outdoor(delta) => write!(f, "outdoor {delta:+}"),
+        }
+    }
+}
+
 /// A timed input.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Event {
@@ -272,6 +283,8 @@ pub struct SimConfig {
     pub outdoor_compensation: bool,
     /// Mean outdoor temperature, °C (room).
     pub outdoor_mean: f64,
+    /// Seconds between trace points handed out (at least one sample period apart).
+    pub trace_every_s: f64,
     /// The timed inputs.
     #[serde(skip)]
     pub script: Vec<Event>,
@@ -288,6 +301,9 @@ pub struct TracePoint {
     pub measurement: f64,
     /// Output, volts.
     pub output: f64,
+    /// Outdoor temperature, °C (room only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outdoor: Option<f64>,
 }
 
 /// A line the operator saw, with its time.
@@ -319,8 +335,10 @@ pub struct SimReport {
     pub samples: u64,
     /// Controller faults seen.
     pub faults: String,
-    /// The trace (every controller sample).
-    pub trace: Vec<TracePoint>,
+    /// The points the picture is drawn from (at most 3000, evenly spread; the full-resolution
+    /// trace goes to the `trace` callback of [`run`] as it is computed).
+    #[serde(skip)]
+    pub picture: Vec<TracePoint>,
     /// What the terminal printed and the LCD showed, in order.
     pub shown: Vec<Shown>,
     /// The LCD at the end.
@@ -395,8 +413,8 @@ impl Plant {
     }
 }
 
-/// Runs the simulation. `progress(fraction)` is called now and then.
-pub fn run(config: &SimConfig, mut progress: impl FnMut(f64)) -> Result<SimReport, String> {
+/// Checks the configuration and the script against what a plant can have.
+fn validate(config: &SimConfig) -> Result<(), String> {
     if !(config.hours.is_finite() && config.hours > 0.0 && config.hours <= 24.0 * 365.0) {
         return Err(format!(
             "hours must be more than 0 and at most 8760 (a year), got {}",
@@ -417,6 +435,12 @@ pub fn run(config: &SimConfig, mut progress: impl FnMut(f64)) -> Result<SimRepor
             config.outdoor_mean
         ));
     }
+    if !(config.trace_every_s.is_finite() && config.trace_every_s > 0.0) {
+        return Err(format!(
+            "trace-every must be more than 0 seconds, got {}",
+            config.trace_every_s
+        ));
+    }
     for event in &config.script {
         if let Input::Outdoor(delta) = event.input {
             if delta.abs() > span {
@@ -426,21 +450,257 @@ pub fn run(config: &SimConfig, mut progress: impl FnMut(f64)) -> Result<SimRepor
             }
         }
     }
+    Ok(())
+}
+
+/// The start-up for the keypad interface: the source's keypad start-up values.
+pub fn keypad_startup(process: ProcessKind) -> Result<Startup, String> {
+    let (scale_min, scale_max) = process.scale();
+    let scaling = Scaling::new(scale_min, scale_max).map_err(|e| e.to_string())?;
+    let params = Parameters {
+        config: Config::default(),
+        setpoint: scale_min,
+        rfel: 0.1 * (scale_max - scale_min),
+        night_setback: 0.0,
+    };
+    Ok(Startup { params, scaling })
+}
+
+/// The first approach to the set-point, measured as the samples come (the same definitions as a
+/// pass over the whole trace, without keeping it): overshoot and settling time.
+#[derive(Clone, Debug, Default)]
+struct FirstStep {
+    /// Set-point, measurement and step at the first sample.
+    start: Option<(f64, f64)>,
+    /// Still at the first set-point.
+    open: bool,
+    overshoot: f64,
+    settled_at: Option<f64>,
+    out_pending: bool,
+}
+
+impl FirstStep {
+    fn sample(&mut self, t: f64, setpoint: f64, measurement: f64) {
+        let (r, step) = match self.start {
+            None => {
+                let step = setpoint - measurement;
+                self.start = Some((setpoint, step));
+                self.open = true;
+                self.settled_at = Some(0.0);
+                (setpoint, step)
+            }
+            Some(s) => s,
+        };
+        if !self.open || (setpoint - r).abs() >= 1e-9 {
+            self.open = false;
+            return;
+        }
+        if step.abs() < 1e-9 {
+            return;
+        }
+        self.overshoot = self.overshoot.max((measurement - r) * step.signum());
+        let band = (0.02 * step.abs()).max(0.2);
+        if (measurement - r).abs() > band {
+            self.settled_at = None;
+            self.out_pending = true;
+        } else if self.out_pending {
+            self.settled_at = Some(t);
+            self.out_pending = false;
+        }
+    }
+
+    /// Overshoot (% of the step) and settling time.
+    fn result(&self) -> (f64, Option<f64>) {
+        match self.start {
+            None => (0.0, None),
+            Some((_, step)) if step.abs() < 1e-9 => (0.0, Some(0.0)),
+            Some((_, step)) => (100.0 * self.overshoot / step.abs(), self.settled_at),
+        }
+    }
+}
+
+/// Points kept for the picture: at most `PICTURE_POINTS`, evenly spread over the run so far
+/// (when full, every other point goes and the spacing doubles), so memory stays flat however
+/// long the run.
+const PICTURE_POINTS: usize = 3000;
+
+/// The controller, its operator interfaces and the process, advanced step by step: a script
+/// drives it in [`run`], an operator at a terminal in the program's `--interactive` mode.
+pub struct Sim {
+    process: ProcessKind,
+    outdoor_compensation: bool,
+    trace_every_s: f64,
+    station: Station<f32>,
+    scaling: Scaling,
+    terminal: Terminal,
+    keypad: Keypad,
+    plant: Plant,
+    step: u64,
+    dt: f64,
+    next_sample: f64,
+    next_trace: f64,
+    u: f64,
+    samples: u64,
+    iae: f64,
+    commits: Vec<f64>,
+    first: FirstStep,
+    picture: Vec<TracePoint>,
+    picture_stride: u64,
+    /// Lines the operator saw.
+    pub shown: Vec<Shown>,
+}
+
+impl Sim {
+    /// A controller started from `startup`, on the process of `config`.
+    pub fn new(config: &SimConfig, startup: Startup, terminal: Terminal) -> Result<Sim, String> {
+        let mut params = startup.params;
+        params.night_setback = config.night_setback;
+        let station = Station::<f32>::new(params, startup.scaling, OperatorLimits::default())
+            .map_err(|e| e.to_string())?;
+        Ok(Sim {
+            process: config.process,
+            outdoor_compensation: config.outdoor_compensation,
+            trace_every_s: config.trace_every_s,
+            station,
+            scaling: startup.scaling,
+            terminal,
+            keypad: Keypad::new(),
+            plant: Plant::new(config.process, config.seed, config.outdoor_mean),
+            step: 0,
+            dt: config.process.dt(),
+            next_sample: 0.0,
+            next_trace: 0.0,
+            u: 0.0,
+            samples: 0,
+            iae: 0.0,
+            commits: Vec::new(),
+            first: FirstStep::default(),
+            picture: Vec::new(),
+            picture_stride: 1,
+            shown: Vec::new(),
+        })
+    }
+
+    /// Simulated seconds from the start.
+    #[must_use]
+    pub fn now(&self) -> f64 {
+        self.step as f64 * self.dt
+    }
+
+    /// Applies an operator's input now; returns how many lines it added to [`shown`](Sim::shown).
+    pub fn input(&mut self, input: &Input) -> usize {
+        let before = self.shown.len();
+        let event = Event {
+            t_s: self.now(),
+            input: input.clone(),
+        };
+        apply(
+            &event,
+            &mut self.station,
+            &mut self.terminal,
+            &mut self.keypad,
+            &mut self.plant,
+            &mut self.shown,
+        );
+        self.shown.len() - before
+    }
+
+    /// Runs one integration step (with a controller sample when one is due); `trace` gets a
+    /// point every `trace_every_s`.
+    pub fn advance(&mut self, trace: &mut impl FnMut(&TracePoint)) {
+        let t = self.now();
+        let (dt, scaling) = (self.dt, self.scaling);
+        if t + 1e-9 >= self.next_sample {
+            let before = self.station.commits();
+            if self.outdoor_compensation && self.process == ProcessKind::Room {
+                // Heat the building loses now, in heater volts: (set-point − outdoor) / gain.
+                let loss = (self.station.setpoint() - self.plant.outdoor(t)) / HEATER_GAIN;
+                self.station.set_feedforward(loss);
+            }
+            let measured = scaling
+                .count_to_units(scaling.units_to_count(self.plant.x))
+                .unwrap_or(self.plant.x);
+            let y = self.station.sample(measured);
+            self.u = Scaling::volts_to_dac(y)
+                .map(Scaling::dac_to_volts)
+                .unwrap_or(0.0);
+            if self.station.commits() > before {
+                self.commits.push(t);
+            }
+            self.next_sample += self.station.staged().active().config.h;
+            self.samples += 1;
+            let point = TracePoint {
+                t_s: t,
+                setpoint: self.station.setpoint(),
+                measurement: measured,
+                output: self.u,
+                outdoor: (self.process == ProcessKind::Room).then(|| self.plant.outdoor(t)),
+            };
+            self.first.sample(t, point.setpoint, point.measurement);
+            if t + 1e-9 >= self.next_trace {
+                trace(&point);
+                self.next_trace += self.trace_every_s;
+            }
+            if self.samples.is_multiple_of(self.picture_stride) {
+                if self.picture.len() == PICTURE_POINTS {
+                    let kept: Vec<TracePoint> = self.picture.iter().step_by(2).copied().collect();
+                    self.picture = kept;
+                    self.picture_stride *= 2;
+                }
+                self.picture.push(point);
+            }
+            self.keypad.show_status(&self.station);
+        }
+        self.iae += (self.station.setpoint() - self.plant.x).abs() * dt;
+        self.plant.step(t, self.u);
+        self.step += 1;
+    }
+
+    /// The terminal's status line now.
+    #[must_use]
+    pub fn status(&self) -> String {
+        Terminal::status(&self.station)
+    }
+
+    /// The LCD now.
+    #[must_use]
+    pub fn lcd(&self) -> String {
+        self.keypad.lcd().render()
+    }
+
+    /// The results so far.
+    #[must_use]
+    pub fn report(&self, config: &SimConfig) -> SimReport {
+        let (overshoot, settling) = self.first.result();
+        SimReport {
+            config: config.clone(),
+            iae_unit_hours: self.iae / 3600.0,
+            overshoot_percent: overshoot,
+            settling_time_s: settling,
+            alarms: self.station.alarm().raised(),
+            commits_s: self.commits.clone(),
+            samples: self.samples,
+            faults: self.station.pid().faults().to_string(),
+            picture: self.picture.clone(),
+            shown: self.shown.clone(),
+            final_lcd: self.lcd(),
+        }
+    }
+}
+
+/// Runs the simulation of `config` with its script; `trace` gets a point every
+/// `config.trace_every_s` as it is computed (memory stays flat in the length of the run).
+pub fn run(
+    config: &SimConfig,
+    mut progress: impl FnMut(f64),
+    mut trace: impl FnMut(&TracePoint),
+) -> Result<SimReport, String> {
+    validate(config)?;
     let mut shown: Vec<Shown> = Vec::new();
     let mut events = config.script.iter().peekable();
-    let (scale_min, scale_max) = config.process.scale();
     let mut terminal = Terminal::new();
     let startup = match config.interface {
-        Interface::Keypad => {
-            let scaling = Scaling::new(scale_min, scale_max).map_err(|e| e.to_string())?;
-            let params = Parameters {
-                config: Config::default(),
-                setpoint: scale_min,
-                rfel: 0.1 * (scale_max - scale_min),
-                night_setback: 0.0,
-            };
-            Startup { params, scaling }
-        }
+        Interface::Keypad => keypad_startup(config.process)?,
         Interface::Terminal => {
             for line in Terminal::banner() {
                 shown.push(Shown {
@@ -474,90 +734,28 @@ pub fn run(config: &SimConfig, mut progress: impl FnMut(f64)) -> Result<SimRepor
             done.ok_or("start-up did not finish")?
         }
     };
-    let mut params = startup.params;
-    params.night_setback = config.night_setback;
-    let scaling = startup.scaling;
-    let mut station = Station::<f32>::new(params, scaling, OperatorLimits::default())
-        .map_err(|e| e.to_string())?;
-    let mut keypad = Keypad::new();
-    let mut plant = Plant::new(config.process, config.seed, config.outdoor_mean);
-
-    let dt = config.process.dt();
+    let mut sim = Sim::new(config, startup, terminal)?;
+    sim.shown = shown;
     let end = config.hours * 3600.0;
-    let steps = (end / dt).round() as u64;
-    let mut next_sample = 0.0;
-    let mut u = 0.0;
-    let mut trace = Vec::new();
-    let mut commits = Vec::new();
-    let mut samples = 0u64;
-    let mut iae = 0.0;
+    let steps = (end / sim.dt).round() as u64;
     for step in 0..=steps {
-        let t = step as f64 * dt;
+        let t = sim.now();
         while let Some(event) = events.next_if(|e| e.t_s <= t) {
-            apply(
-                event,
-                &mut station,
-                &mut terminal,
-                &mut keypad,
-                &mut plant,
-                &mut shown,
-            );
+            sim.input(&event.input);
         }
-        if t + 1e-9 >= next_sample {
-            let before = station.commits();
-            if config.outdoor_compensation && config.process == ProcessKind::Room {
-                // Heat the building loses now, in heater volts: (set-point − outdoor) / gain.
-                station.set_feedforward((station.setpoint() - plant.outdoor(t)) / HEATER_GAIN);
-            }
-            let measured = scaling
-                .count_to_units(scaling.units_to_count(plant.x))
-                .unwrap_or(plant.x);
-            let y = station.sample(measured);
-            u = Scaling::volts_to_dac(y)
-                .map(Scaling::dac_to_volts)
-                .unwrap_or(0.0);
-            if station.commits() > before {
-                commits.push(t);
-            }
-            let h = station.staged().active().config.h;
-            next_sample += h;
-            samples += 1;
-            trace.push(TracePoint {
-                t_s: t,
-                setpoint: station.setpoint(),
-                measurement: measured,
-                output: u,
-            });
-            keypad.show_status(&station);
-        }
-        iae += (station.setpoint() - plant.x).abs() * dt;
-        plant.step(t, u);
+        sim.advance(&mut trace);
         if step % 100_000 == 0 {
             progress(step as f64 / steps.max(1) as f64);
         }
     }
     for event in events {
-        shown.push(Shown {
+        sim.shown.push(Shown {
             t_s: event.t_s,
-            text: format!("(not reached: {:?} after the end of the run)", event.input),
+            text: format!("(not reached: {} after the end of the run)", event.input),
         });
     }
     progress(1.0);
-
-    let (overshoot, settling) = first_step_metrics(&trace);
-    Ok(SimReport {
-        config: config.clone(),
-        iae_unit_hours: iae / 3600.0,
-        overshoot_percent: overshoot,
-        settling_time_s: settling,
-        alarms: station.alarm().raised(),
-        commits_s: commits,
-        samples,
-        faults: station.pid().faults().to_string(),
-        trace,
-        shown,
-        final_lcd: keypad.lcd().render(),
-    })
+    Ok(sim.report(config))
 }
 
 fn apply(
@@ -618,35 +816,6 @@ fn apply(
     }
 }
 
-/// Overshoot (%) and settling time (s) of the first approach to the set-point: from the start
-/// until the set-point first changes.
-fn first_step_metrics(trace: &[TracePoint]) -> (f64, Option<f64>) {
-    let Some(first) = trace.first() else {
-        return (0.0, None);
-    };
-    let r = first.setpoint;
-    let step = r - first.measurement;
-    let span: Vec<&TracePoint> = trace
-        .iter()
-        .take_while(|p| (p.setpoint - r).abs() < 1e-9)
-        .collect();
-    if step.abs() < 1e-9 {
-        return (0.0, Some(0.0));
-    }
-    let overshoot = span
-        .iter()
-        .map(|p| (p.measurement - r) * step.signum())
-        .fold(0.0, f64::max);
-    let band = (0.02 * step.abs()).max(0.2);
-    let last_out = span.iter().rposition(|p| (p.measurement - r).abs() > band);
-    let settling = match last_out {
-        None => Some(0.0),
-        Some(i) if i + 1 < span.len() => span.get(i + 1).map(|p| p.t_s),
-        Some(_) => None,
-    };
-    (100.0 * overshoot / step.abs(), settling)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -678,10 +847,11 @@ mod tests {
             night_setback: 0.0,
             outdoor_compensation: false,
             outdoor_mean: 0.0,
+            trace_every_s: 60.0,
             script: parse_script("0 term PID\n0 keys *").unwrap(),
         };
         assert!(
-            run(&config, |_| {})
+            run(&config, |_| {}, |_| {})
                 .unwrap_err()
                 .contains("start-up dialogue is not finished")
         );

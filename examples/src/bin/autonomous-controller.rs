@@ -2,14 +2,17 @@
 //! tank, run in simulated time on `regler-pid`, operated through the source's terminal dialogue
 //! and keypad (from a script, or typed on stdin with `--interactive`).
 
-use std::io::{BufRead, IsTerminal};
+use std::io::{BufRead, IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
 
 use clap::{Parser, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
+use regler_examples::autonomous::terminal::Terminal;
 use regler_examples::autonomous::{
-    self, Event, Input, Interface, ProcessKind, SimConfig, SimReport, parse_script,
+    self, Input, Interface, ProcessKind, Shown, Sim, SimConfig, SimReport, TracePoint, parse_script,
 };
 use regler_examples::svg::{self, Series};
 
@@ -44,9 +47,13 @@ struct Args {
     /// Type terminal lines (or `keys …`, `night on`, `run SECONDS`, `quit`) on stdin.
     #[arg(long)]
     interactive: bool,
-    /// Simulated seconds each interactive line advances the clock.
-    #[arg(long, default_value_t = 600.0)]
-    step_s: f64,
+    /// With --interactive: simulated seconds per real second (1 = real time; the default 60
+    /// makes a minute of the room pass each second).
+    #[arg(long, default_value_t = 60.0)]
+    speed: f64,
+    /// Seconds between the trace points of --json (at least one sample apart).
+    #[arg(long, default_value_t = 60.0)]
+    trace_every: f64,
     /// How the controller starts.
     #[arg(long, value_enum, default_value_t = InterfaceArg::Terminal)]
     interface: InterfaceArg,
@@ -99,7 +106,7 @@ fn run(args: &Args) -> Result<(), String> {
                 .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
             parse_script(&text)?
         }
-        (None, true) => interactive_script(args)?,
+        (None, true) => Vec::new(),
         (None, false) => parse_script(autonomous::demo_script(process, interface))?,
     };
     let config = SimConfig {
@@ -110,40 +117,32 @@ fn run(args: &Args) -> Result<(), String> {
         night_setback: args.night_setback,
         outdoor_compensation: args.outdoor_compensation,
         outdoor_mean: args.outdoor_mean,
+        trace_every_s: args.trace_every,
         script,
     };
-    let bar = if args.quiet || args.json {
-        ProgressBar::hidden()
+    let report = if args.interactive {
+        interactive(args, &config)?
     } else {
-        ProgressBar::new(1000)
+        batch(args, &config)?
     };
-    bar.set_style(
-        ProgressStyle::with_template("{spinner} simulating [{bar:40}] {percent}%")
-            .map_err(|e| e.to_string())?,
-    );
-    let report = autonomous::run(&config, |f| bar.set_position((f * 1000.0) as u64))?;
-    bar.finish_and_clear();
     if !args.no_svg {
         std::fs::write(&args.svg, picture(&report))
             .map_err(|e| format!("cannot write {}: {e}", args.svg.display()))?;
     }
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?
-        );
+        // The trace went out as it was computed; the rest of the report closes the object.
+        let Ok(serde_json::Value::Object(fields)) = serde_json::to_value(&report) else {
+            return Err("the report did not serialize".into());
+        };
+        let mut out = std::io::stdout().lock();
+        for (key, value) in fields {
+            let _ = writeln!(out, ",\n  \"{key}\": {value}");
+        }
+        let _ = writeln!(out, "}}");
         return Ok(());
     }
-    if !args.quiet {
-        for s in &report.shown {
-            for (i, line) in s.text.lines().enumerate() {
-                if i == 0 {
-                    println!("[{}] {line}", clock(s.t_s));
-                } else {
-                    println!("        {line}");
-                }
-            }
-        }
+    if !args.quiet && !args.interactive {
+        print_shown(&report.shown);
         println!();
     }
     print!("{}", summary(&report));
@@ -153,51 +152,202 @@ fn run(args: &Args) -> Result<(), String> {
     Ok(())
 }
 
-/// Reads stdin lines as timed inputs, each `--step-s` after the one before: plain text is typed
-/// at the terminal; `keys …`, `night on|off`, `outdoor D` as in scripts; `run S` only advances.
-fn interactive_script(args: &Args) -> Result<Vec<Event>, String> {
-    if !(args.step_s.is_finite() && args.step_s > 0.0) {
-        return Err(format!("step-s must be > 0, got {}", args.step_s));
+/// Writes trace points as JSON array elements on stdout as they come: `{"trace": [` first,
+/// then each point; the caller closes the array and adds the rest of the report.
+struct TraceWriter {
+    on: bool,
+    first: bool,
+}
+
+impl TraceWriter {
+    fn new(on: bool) -> TraceWriter {
+        if on {
+            print!("{{\n  \"trace\": [");
+        }
+        TraceWriter { on, first: true }
     }
-    let stdin = std::io::stdin();
-    if stdin.is_terminal() {
-        eprintln!(
-            "Type the answers to the start-up questions, then commands (Y, C, keys …, night on, run 3600, quit)."
-        );
-        for line in autonomous::terminal::Terminal::banner() {
-            eprintln!("{line}");
+
+    fn point(&mut self, p: &TracePoint) {
+        if self.on {
+            let sep = if self.first { "\n    " } else { ",\n    " };
+            self.first = false;
+            print!("{sep}{}", serde_json::to_string(p).unwrap_or_default());
         }
     }
-    let mut events = Vec::new();
-    let mut t = 0.0;
-    let mut started = false;
-    for line in stdin.lock().lines() {
-        let line = line.map_err(|e| e.to_string())?;
+
+    fn close(&self) {
+        if self.on {
+            print!("\n  ]");
+        }
+    }
+}
+
+/// The whole run from its script, with a progress bar.
+fn batch(args: &Args, config: &SimConfig) -> Result<SimReport, String> {
+    let bar = if args.quiet || args.json {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(1000)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} simulating [{bar:40}] {percent}%")
+            .map_err(|e| e.to_string())?,
+    );
+    // Checked before the trace array is opened, so a refused run prints only its error.
+    if !(args.trace_every.is_finite() && args.trace_every > 0.0) {
+        return Err(format!(
+            "trace-every must be more than 0 seconds, got {}",
+            args.trace_every
+        ));
+    }
+    let mut writer = None;
+    let report = autonomous::run(
+        config,
+        |f| bar.set_position((f * 1000.0) as u64),
+        |p| {
+            writer
+                .get_or_insert_with(|| TraceWriter::new(args.json))
+                .point(p)
+        },
+    );
+    bar.finish_and_clear();
+    let report = report?;
+    writer
+        .unwrap_or_else(|| TraceWriter::new(args.json))
+        .close();
+    Ok(report)
+}
+
+/// Prints lines the operator saw, each with its simulated time.
+fn print_shown(shown: &[Shown]) {
+    for s in shown {
+        for (i, line) in s.text.lines().enumerate() {
+            if i == 0 {
+                println!("[{}] {line}", clock(s.t_s));
+            } else {
+                println!("        {line}");
+            }
+        }
+    }
+}
+
+/// The controller at a terminal: each question, reply, status line and LCD as the operator
+/// types, the plant running meanwhile at `--speed` times real time. Plain lines are typed at the
+/// terminal; `keys …`, `night on|off` and `outdoor D` as in scripts; `run S` skips S simulated
+/// seconds ahead; `quit` (or the end of input) ends the run.
+fn interactive(args: &Args, config: &SimConfig) -> Result<SimReport, String> {
+    if !(args.speed.is_finite() && args.speed > 0.0 && args.speed <= 1e6) {
+        return Err(format!(
+            "speed must be more than 0 and at most 1000000, got {}",
+            args.speed
+        ));
+    }
+    let (tx, rx) = mpsc::channel::<String>();
+    std::thread::spawn(move || {
+        for line in std::io::stdin().lock().lines() {
+            let Ok(line) = line else { break };
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let tty = std::io::stdin().is_terminal();
+    let say = |lines: &[String]| {
+        let mut out = std::io::stdout().lock();
+        for line in lines {
+            let _ = writeln!(out, "{line}");
+        }
+        let _ = out.flush();
+    };
+    if tty {
+        say(&["Answer the start-up questions; then Y (change mode), C (acknowledge), an empty line (status), keys …, night on|off, outdoor D, run SECONDS, quit.".into()]);
+    }
+    let mut terminal = Terminal::new();
+    let mut transcript: Vec<Shown> = Vec::new();
+    let startup = match config.interface {
+        Interface::Keypad => autonomous::keypad_startup(config.process)?,
+        Interface::Terminal => {
+            say(&Terminal::banner());
+            loop {
+                let Ok(line) = rx.recv() else {
+                    return Err("input ended before the start-up dialogue was finished".into());
+                };
+                if line.trim().eq_ignore_ascii_case("quit") {
+                    return Err("quit during the start-up dialogue".into());
+                }
+                if !tty {
+                    say(&[format!("> {line}")]);
+                }
+                transcript.push(Shown {
+                    t_s: 0.0,
+                    text: format!("> {line}"),
+                });
+                let (out, done) = terminal.startup_line(&line);
+                say(&out);
+                transcript.extend(out.into_iter().map(|text| Shown { t_s: 0.0, text }));
+                if let Some(startup) = done {
+                    break startup;
+                }
+            }
+        }
+    };
+    let mut sim = Sim::new(config, startup, terminal)?;
+    sim.shown = transcript;
+    let end = config.hours * 3600.0;
+    let started = Instant::now();
+    let mut skipped = 0.0;
+    let mut writer = TraceWriter::new(args.json);
+    let mut trace = |p: &TracePoint| writer.point(p);
+    say(&[format!("[{}] {}", clock(sim.now()), sim.status())]);
+    while sim.now() < end {
+        // The plant runs at `speed` times real time, plus what `run S` skipped.
+        let target = (started.elapsed().as_secs_f64() * args.speed + skipped).min(end);
+        while sim.now() < target {
+            sim.advance(&mut trace);
+        }
+        let line = match rx.recv_timeout(Duration::from_millis(20)) {
+            Ok(line) => line,
+            Err(mpsc::RecvTimeoutError::Timeout) => continue,
+            Err(mpsc::RecvTimeoutError::Disconnected) => break,
+        };
         let trimmed = line.trim();
         if trimmed.eq_ignore_ascii_case("quit") {
             break;
         }
         if let Some(seconds) = trimmed.strip_prefix("run ") {
-            t += seconds
-                .trim()
-                .parse::<f64>()
-                .map_err(|_| format!("run takes seconds, got {seconds:?}"))?;
+            match seconds.trim().parse::<f64>() {
+                Ok(s) if s.is_finite() && s >= 0.0 => skipped += s,
+                _ => say(&[format!("run takes seconds, got '{}'", seconds.trim())]),
+            }
             continue;
         }
-        let parsed = parse_script(&format!("0 {trimmed}"));
-        let input = match parsed.ok().and_then(|mut e| e.pop()) {
+        let input = match parse_script(&format!("0 {trimmed}"))
+            .ok()
+            .and_then(|mut e| e.pop())
+        {
             Some(e) if !matches!(e.input, Input::Term(_)) => e.input,
             _ => Input::Term(line.clone()),
         };
-        events.push(Event { t_s: t, input });
-        // Start-up answers all land at 0; the clock runs once the regulator has started.
-        if started {
-            t += args.step_s;
-        } else if line.is_empty() {
-            started = true;
+        let from = sim.shown.len();
+        sim.input(&input);
+        let mut lines = Vec::new();
+        for s in &sim.shown[from..] {
+            if tty && s.text.starts_with("> ") {
+                continue; // the operator sees what they typed
+            }
+            for (i, text) in s.text.lines().enumerate() {
+                lines.push(if i == 0 {
+                    format!("[{}] {text}", clock(s.t_s))
+                } else {
+                    format!("        {text}")
+                });
+            }
         }
+        lines.push(format!("[{}] {}", clock(sim.now()), sim.status()));
+        say(&lines);
     }
-    Ok(events)
+    writer.close();
+    Ok(sim.report(config))
 }
 
 fn clock(t: f64) -> String {
@@ -247,12 +397,10 @@ fn summary(r: &SimReport) -> String {
 
 fn picture(r: &SimReport) -> String {
     let hours = |t: f64| t / 3600.0;
-    let step = (r.trace.len() / 1500).max(1);
-    let points = |f: fn(&autonomous::TracePoint) -> f64| -> Vec<(f64, f64)> {
-        r.trace
+    let points = |f: fn(&autonomous::TracePoint) -> Option<f64>| -> Vec<(f64, f64)> {
+        r.picture
             .iter()
-            .step_by(step)
-            .map(|p| (hours(p.t_s), f(p)))
+            .filter_map(|p| f(p).map(|v| (hours(p.t_s), v)))
             .collect()
     };
     let markers: Vec<f64> = r.commits_s.iter().map(|t| hours(*t)).collect();
@@ -260,24 +408,42 @@ fn picture(r: &SimReport) -> String {
         ProcessKind::Room => "temperature (°C)",
         ProcessKind::Tank => "level (%)",
     };
-    let top = svg::line_chart_marked(
+    let top_series = vec![
+        Series {
+            label: "set-point",
+            colour: "#2c3e50",
+            dashed: true,
+            points: points(|p| Some(p.setpoint)),
+        },
+        Series {
+            label: "measurement",
+            colour: "#c0392b",
+            dashed: false,
+            points: points(|p| Some(p.measurement)),
+        },
+    ];
+    // The outdoor temperature is what outdoor compensation acts on: a panel of its own when it
+    // is on (on the room's axis it would squeeze the room's band flat).
+    let outdoor = r.config.outdoor_compensation.then(|| {
+        svg::line_chart_fitted(
+            "Outdoor temperature (fed forward)",
+            "hours",
+            "temperature (°C)",
+            &[Series {
+                label: "outdoor",
+                colour: "#7f8c8d",
+                dashed: false,
+                points: points(|p| p.outdoor),
+            }],
+            &markers,
+            "commit",
+        )
+    });
+    let top = svg::line_chart_fitted(
         "Set-point and measurement",
         "hours",
         unit,
-        &[
-            Series {
-                label: "set-point",
-                colour: "#2c3e50",
-                dashed: true,
-                points: points(|p| p.setpoint),
-            },
-            Series {
-                label: "measurement",
-                colour: "#c0392b",
-                dashed: false,
-                points: points(|p| p.measurement),
-            },
-        ],
+        &top_series,
         &markers,
         "commit",
     );
@@ -289,13 +455,18 @@ fn picture(r: &SimReport) -> String {
             label: "output Y",
             colour: "#2471a3",
             dashed: false,
-            points: points(|p| p.output),
+            points: points(|p| Some(p.output)),
         }],
         &markers,
         "commit",
     );
-    let bottom = bottom.replacen("<svg ", "<svg y=\"420\" ", 1);
+    let (middle, below) = match outdoor {
+        Some(chart) => (chart.replacen("<svg ", "<svg y=\"420\" ", 1), 840),
+        None => (String::new(), 420),
+    };
+    let bottom = bottom.replacen("<svg ", &format!("<svg y=\"{below}\" "), 1);
     format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"720\" height=\"840\">\n{top}{bottom}</svg>\n"
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"720\" height=\"{}\">\n{top}{middle}{bottom}</svg>\n",
+        below + 420
     )
 }
