@@ -364,8 +364,13 @@ fn summary(r: &SimReport) -> String {
     };
     let _ = writeln!(
         s,
-        "Autonomous controller, {:?} process, {:.1} h simulated, seed {}",
-        r.config.process, r.config.hours, r.config.seed
+        "Autonomous controller, {} process, {:.1} h simulated, seed {}",
+        match r.config.process {
+            ProcessKind::Room => "room",
+            ProcessKind::Tank => "tank",
+        },
+        r.config.hours,
+        r.config.seed
     );
     let _ = writeln!(s, "  IAE                {:.2} {unit}·h", r.iae_unit_hours);
     let _ = writeln!(

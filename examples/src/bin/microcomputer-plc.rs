@@ -89,7 +89,7 @@ fn run(args: &Args) -> Result<(), String> {
     for s in &args.signals {
         if !SIGNALS.iter().any(|(name, ..)| name == s) {
             return Err(format!(
-                "no signal {s:?} (one of: {})",
+                "no signal '{s}' (one of: {})",
                 SIGNALS.map(|s| s.0).join(", ")
             ));
         }
