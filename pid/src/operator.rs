@@ -591,6 +591,13 @@ impl<F: Real> Staged<F> {
         value_of(&self.active, code)
     }
 
+    /// The staged value of a numeric parameter, what a commit would bring into force (`None`
+    /// for TYP, Y and XIN).
+    #[must_use]
+    pub fn shadow_value(&self, code: Code) -> Option<F> {
+        value_of(&self.shadow, code)
+    }
+
     /// The measurement scale.
     #[must_use]
     pub const fn scaling(&self) -> Scaling<F> {
@@ -884,6 +891,9 @@ mod tests {
         assert_eq!(s.shadow().config.dymax, Some(0.5));
         s.edit(Code::Dymax, 0.0).unwrap();
         assert_eq!(s.shadow().config.dymax, None);
+        assert_eq!(s.shadow_value(Code::Rfel), Some(3.0));
+        assert_eq!(s.active_value(Code::Rfel), Some(5.0));
+        assert_eq!(s.shadow_value(Code::Y), None);
     }
 
     #[test]

@@ -335,21 +335,13 @@ fn shown_value<T: Scalar>(code: Code, station: &Station<T>) -> String {
 
 /// The upper line for a staged parameter: the value the shadow set holds for it.
 fn staged_value<T: Scalar>(code: Code, station: &Station<T>) -> String {
-    let p = station.staged().shadow();
-    let value = match code {
-        Code::Typ => return format!("TYP={}", p.config.kind),
-        Code::Win => p.setpoint,
-        Code::S => p.config.h,
-        Code::Rfel => p.rfel,
-        Code::Kp => p.config.k,
-        Code::Td => p.config.td,
-        Code::Ti => p.config.ti,
-        Code::Ymin => p.config.ymin,
-        Code::Ymax => p.config.ymax,
-        Code::Dymax => p.config.dymax.unwrap_or(0.0),
-        Code::Y | Code::Xin => return format!("{}=?", code.name()),
-    };
-    format!("{}={}", code.name(), trim(value))
+    if code == Code::Typ {
+        return format!("TYP={}", station.staged().shadow().config.kind);
+    }
+    match station.staged().shadow_value(code) {
+        Some(v) => format!("{}={}", code.name(), trim(v)),
+        None => format!("{}=?", code.name()),
+    }
 }
 
 /// A number as the LCD shows it: at most three decimals, no trailing zeros.
