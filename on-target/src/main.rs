@@ -23,17 +23,22 @@ mod trolley;
 /// A test: `Ok` or the first check that failed.
 type Outcome = Result<(), &'static str>;
 
+/// A named test.
+type Test = (&'static str, fn() -> Outcome);
+
 /// Fails the test with the file, line and condition when `cond` does not hold.
 #[macro_export]
 macro_rules! check {
-    ($cond:expr) => {
-        if !$cond {
+    ($cond:expr) => {{
+        // Bound first: `!(a < b)` on floats reads as `a >= b`, which a NaN makes false.
+        let held: bool = $cond;
+        if !held {
             return Err(concat!(file!(), ":", line!(), ": ", stringify!($cond)));
         }
-    };
+    }};
 }
 
-const TESTS: &[(&str, fn() -> Outcome)] = &[
+const TESTS: &[Test] = &[
     (
         "pid::f32_closed_loop_survives_nan_at_power_up",
         pid::f32_closed_loop_survives_nan_at_power_up,
@@ -161,5 +166,7 @@ fn main() -> ! {
     } else {
         debug::EXIT_FAILURE
     });
-    loop {}
+    loop {
+        cortex_m::asm::wfi();
+    }
 }

@@ -8,6 +8,10 @@ use regler_pid::{
 
 use crate::{Outcome, check};
 
+#[allow(
+    clippy::field_reassign_with_default,
+    reason = "the contract's own spelling for an f32 config"
+)]
 fn room() -> Config<f32> {
     let mut c = Config::default();
     c.kind = Kind::PI;

@@ -6,7 +6,7 @@
 use core::ptr::{addr_of, read_volatile, write_volatile};
 
 use cortex_m_rt::entry;
-use regler_footprint::{finish, refused, stack};
+use regler_footprint::{MEASURING, finish, refused, stack};
 use regler_scan_cycle::{CycleConfig, Executive, Io, Ton};
 
 static mut INPUTS: [u16; 34] = [0; 34];
@@ -29,7 +29,9 @@ impl Io<34, 15> for Hardware {
 
 #[entry]
 fn main() -> ! {
-    let mut plc = stack("Executive::<34, 15>::new", || Executive::<34, 15>::new(CycleConfig::source()));
+    let mut plc = stack("Executive::<34, 15>::new", || {
+        Executive::<34, 15>::new(CycleConfig::source())
+    });
     if plc.conditioning_mut().set_debounce(3, 4).is_err() || plc.force_output(7, true).is_err() {
         refused();
     }
@@ -42,10 +44,12 @@ fn main() -> ! {
         });
     };
     // Measured three times (the first call may differ); only in the measuring build.
-    for _ in 0..if cfg!(feature = "measure") { 3 } else { 0 } {
-        stack("Executive::cycle", || cycle(&mut plc));
+    if MEASURING {
+        for _ in 0..3 {
+            stack("Executive::cycle", || cycle(&mut plc));
+        }
     }
-    if cfg!(feature = "measure") {
+    if MEASURING {
         finish();
     }
     loop {

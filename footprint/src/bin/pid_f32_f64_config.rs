@@ -7,7 +7,7 @@
 use core::ptr::{addr_of, read_volatile, write_volatile};
 
 use cortex_m_rt::entry;
-use regler_footprint::{finish, refused, stack};
+use regler_footprint::{MEASURING, finish, refused, stack};
 use regler_pid::{Config, Kind, Pid};
 
 /// Parameters as stored: K, Ti, Td, h, ymin, ymax.
@@ -22,24 +22,28 @@ fn stored(i: usize) -> f64 {
 
 #[entry]
 fn main() -> ! {
-    let mut config = Config::<f64>::default();
-    config.kind = Kind::PID;
-    config.k = stored(0);
-    config.ti = stored(1);
-    config.td = stored(2);
-    config.h = stored(3);
-    config.ymin = stored(4);
-    config.ymax = stored(5);
+    let config = Config::<f64> {
+        kind: Kind::PID,
+        k: stored(0),
+        ti: stored(1),
+        td: stored(2),
+        h: stored(3),
+        ymin: stored(4),
+        ymax: stored(5),
+        ..Config::default()
+    };
     let Ok(mut pid) = stack("Pid::<f32>::new from f64", || Pid::<f32>::new(&config)) else {
         refused()
     };
     // Measured three times (the first call may differ); only in the measuring build.
-    for _ in 0..if cfg!(feature = "measure") { 3 } else { 0 } {
-        let y = unsafe { read_volatile(addr_of!(MEASUREMENT)) };
-        let u = stack("Pid::<f32>::update (f64 config)", || pid.update(5.0, y));
-        unsafe { write_volatile(&raw mut OUTPUT, u) };
+    if MEASURING {
+        for _ in 0..3 {
+            let y = unsafe { read_volatile(addr_of!(MEASUREMENT)) };
+            let u = stack("Pid::<f32>::update (f64 config)", || pid.update(5.0, y));
+            unsafe { write_volatile(&raw mut OUTPUT, u) };
+        }
     }
-    if cfg!(feature = "measure") {
+    if MEASURING {
         finish();
     }
     loop {

@@ -6,7 +6,7 @@
 use core::ptr::{addr_of, read_volatile, write_volatile};
 
 use cortex_m_rt::entry;
-use regler_footprint::{finish, refused, stack};
+use regler_footprint::{MEASURING, finish, refused, stack};
 use regler_pid::{Code, Config, OperatorLimits, Parameters, Scaling, Station};
 
 /// Parameters as stored: K, Ti, set-point, RFEL, SCALEMIN, SCALEMAX.
@@ -21,23 +21,34 @@ fn stored(i: usize) -> f32 {
 
 #[entry]
 fn main() -> ! {
-    let mut config = Config::<f32>::default();
-    config.k = stored(0);
-    config.ti = stored(1);
-    let params = Parameters { config, setpoint: stored(2), rfel: stored(3), night_setback: 0.0 };
-    let Ok(scaling) = Scaling::new(stored(4), stored(5)) else { refused() };
+    let config = Config::<f32> {
+        k: stored(0),
+        ti: stored(1),
+        ..Config::default()
+    };
+    let params = Parameters {
+        config,
+        setpoint: stored(2),
+        rfel: stored(3),
+        night_setback: 0.0,
+    };
+    let Ok(scaling) = Scaling::new(stored(4), stored(5)) else {
+        refused()
+    };
     let new = || Station::<f32, f32>::new(params, scaling, OperatorLimits::default());
     let Ok(mut station) = stack("Station::<f32, f32>::new", new) else {
         refused()
     };
     // Measured three times (the first call may differ); only in the measuring build.
-    for _ in 0..if cfg!(feature = "measure") { 3 } else { 0 } {
-        let y = stack("Station::<f32, f32>::sample", || {
-            station.sample(unsafe { read_volatile(addr_of!(MEASUREMENT)) })
-        });
-        unsafe { write_volatile(&raw mut OUTPUT, y) };
+    if MEASURING {
+        for _ in 0..3 {
+            let y = stack("Station::<f32, f32>::sample", || {
+                station.sample(unsafe { read_volatile(addr_of!(MEASUREMENT)) })
+            });
+            unsafe { write_volatile(&raw mut OUTPUT, y) };
+        }
     }
-    if cfg!(feature = "measure") {
+    if MEASURING {
         finish();
     }
     loop {

@@ -6,7 +6,7 @@
 use core::ptr::{addr_of, read_volatile, write_volatile};
 
 use cortex_m_rt::entry;
-use regler_footprint::{finish, refused, stack};
+use regler_footprint::{MEASURING, finish, refused, stack};
 use regler_scan_cycle::TimerQueue;
 
 static DELAYS: [u32; 4] = [3, 70, 5000, 1];
@@ -24,17 +24,19 @@ fn main() -> ! {
             refused();
         }
     }
-    let mut tick = |queue: &mut TimerQueue<u8, 64>| {
+    let tick = |queue: &mut TimerQueue<u8, 64>| {
         queue.tick(|a| unsafe { write_volatile(&raw mut FIRED, u32::from(a)) });
         if queue.len() < 8 {
             let _ = queue.insert(delay(queue.len()), 1);
         }
     };
     // Measured three times (the first call may differ); only in the measuring build.
-    for _ in 0..if cfg!(feature = "measure") { 3 } else { 0 } {
-        stack("TimerQueue::tick", || tick(&mut queue));
+    if MEASURING {
+        for _ in 0..3 {
+            stack("TimerQueue::tick", || tick(&mut queue));
+        }
     }
-    if cfg!(feature = "measure") {
+    if MEASURING {
         finish();
     }
     loop {

@@ -5,7 +5,7 @@
 use core::ptr::{addr_of, read_volatile, write_volatile};
 
 use cortex_m_rt::entry;
-use regler_footprint::{finish, refused, stack};
+use regler_footprint::{MEASURING, finish, refused, stack};
 use regler_trolley_id::{Strategy, Voter, decode};
 
 static READINGS: [u16; 5] = [0x04D2, 0x04D2, 0x04D0, 0, 0x04D2];
@@ -17,10 +17,12 @@ fn reading(i: usize) -> u16 {
 
 #[entry]
 fn main() -> ! {
-    let Ok(mut voter) = stack("Voter::new", || Voter::new(Strategy::Majority { min_samples: 3 })) else {
+    let Ok(mut voter) = stack("Voter::new", || {
+        Voter::new(Strategy::Majority { min_samples: 3 })
+    }) else {
         refused()
     };
-    let mut passage = |voter: &mut Voter| {
+    let passage = |voter: &mut Voter| {
         for i in 0..5 {
             voter.sample(reading(i));
         }
@@ -30,10 +32,12 @@ fn main() -> ! {
         unsafe { write_volatile(&raw mut ROUTED, id | ok << 15) };
     };
     // Measured three times (the first call may differ); only in the measuring build.
-    for _ in 0..if cfg!(feature = "measure") { 3 } else { 0 } {
-        stack("Voter: 5 readings and finish", || passage(&mut voter));
+    if MEASURING {
+        for _ in 0..3 {
+            stack("Voter: 5 readings and finish", || passage(&mut voter));
+        }
     }
-    if cfg!(feature = "measure") {
+    if MEASURING {
         finish();
     }
     loop {

@@ -37,7 +37,19 @@ fn twice(name: &str, mut op: impl FnMut()) {
     regler_marker(2);
 }
 
+/// Ends the run with a failure (a configuration refused: it never is).
+fn fail() -> ! {
+    debug::exit(debug::EXIT_FAILURE);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
 #[entry]
+#[allow(
+    clippy::field_reassign_with_default,
+    reason = "the contract's own spelling for an f32 config"
+)]
 fn main() -> ! {
     hprintln!("n {}", N);
     // The benches' loop: a controller with everything on and a first-order plant.
@@ -53,8 +65,7 @@ fn main() -> ! {
     c.ymax = 5.0;
     c.dymax = Some(0.5);
     let Ok(mut regler) = Pid::<f32>::new(&c) else {
-        debug::exit(debug::EXIT_FAILURE);
-        loop {}
+        fail()
     };
     let mut y = 0.0f32;
     twice("regler Pid<f32>::update + plant", || {
@@ -86,18 +97,16 @@ fn main() -> ! {
         },
     );
     let Ok(table) = DistanceTable::<8>::new(1000, &[100, 200, 300, 400, 500, 600, 700, 800]) else {
-        debug::exit(debug::EXIT_FAILURE);
-        loop {}
+        fail()
     };
     let Ok(mut tracker) = Tracker::<u16, 256, 8>::new(table, 6) else {
-        debug::exit(debug::EXIT_FAILURE);
-        loop {}
+        fail()
     };
     let mut k = 0u32;
     twice(
         "Tracker<u16, 256, 8>::pulse, a trolley entering every 4 pulses",
         || {
-            if k % 4 == 0 {
+            if k.is_multiple_of(4) {
                 let _ = tracker.enter(k as u16, (k % 8) as usize);
             }
             tracker.pulse(|e| {
@@ -112,5 +121,7 @@ fn main() -> ! {
         word = word.wrapping_add(1) & 0x1FFF;
     });
     debug::exit(debug::EXIT_SUCCESS);
-    loop {}
+    loop {
+        cortex_m::asm::wfi();
+    }
 }
