@@ -499,10 +499,8 @@ impl Simulator {
     /// stopped early.
     pub fn run(&mut self, cycles: u64) -> (u64, Option<Halt>) {
         let mut done = 0u64;
-        let mut before = Vec::with_capacity(self.breakpoints.len());
         while done < cycles {
-            before.clear();
-            before.extend(self.breakpoints.iter().map(|b| self.plc.reached(*b)));
+            let watch = self.plc.watch();
             let program = &mut self.program;
             if let Err(halt) = self.plc.cycle(&mut self.plant, |scan| program.scan(scan)) {
                 return (done, Some(halt));
@@ -539,12 +537,7 @@ impl Simulator {
             self.plant.advance(PERIOD_MS.saturating_sub(busy_ms).max(1));
             self.plc.capture(&self.plant.inputs);
             // A breakpoint stops the run on the cycle it comes to hold, not while it holds.
-            let fired = self
-                .breakpoints
-                .iter()
-                .zip(&before)
-                .find(|&(b, &was)| !was && self.plc.reached(*b));
-            if let Some((&b, _)) = fired {
+            if let Some(b) = watch.fired(&self.plc, &self.breakpoints) {
                 return (done, Some(Halt::Breakpoint(b)));
             }
         }

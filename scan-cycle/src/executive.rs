@@ -104,6 +104,25 @@ pub enum Breakpoint {
     OutputOff(usize),
 }
 
+/// The images and cycle count the breakpoints saw before a cycle ([`Executive::watch`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BreakpointWatch<const IW: usize, const OW: usize> {
+    cycle: u64,
+    inputs: Image<IW>,
+    outputs: Image<OW>,
+}
+
+impl<const IW: usize, const OW: usize> BreakpointWatch<IW, OW> {
+    /// The first of `breakpoints` that holds in `now` but did not when the watch was taken: the
+    /// breakpoint that came to hold in the cycles between.
+    #[must_use]
+    pub fn fired(&self, now: &Executive<IW, OW>, breakpoints: &[Breakpoint]) -> Option<Breakpoint> {
+        breakpoints.iter().copied().find(|&b| {
+            now.reached(b) && !Executive::holds(b, self.cycle, &self.inputs, &self.outputs)
+        })
+    }
+}
+
 /// What supervises a cycle from outside it: nothing ([`Executive::cycle`]) or [`Signals`]
 /// ([`Executive::cycle_with`]).
 trait Supervision<const IW: usize> {
@@ -655,6 +674,18 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         Self::holds(breakpoint, self.cycle, &self.inputs, &self.previous)
     }
 
+    /// What the breakpoints see now, to tell after the next cycle which of them came to hold
+    /// in it ([`BreakpointWatch::fired`]). [`run`](Executive::run) uses it; so can a monitor
+    /// that runs its own loop (a plant simulation between cycles, say).
+    #[must_use]
+    pub const fn watch(&self) -> BreakpointWatch<IW, OW> {
+        BreakpointWatch {
+            cycle: self.cycle,
+            inputs: self.inputs,
+            outputs: self.previous,
+        }
+    }
+
     fn holds(breakpoint: Breakpoint, cycle: u64, inputs: &Image<IW>, outputs: &Image<OW>) -> bool {
         match breakpoint {
             Breakpoint::Cycle(n) => cycle >= n,
@@ -694,16 +725,13 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         let mut done = 0u64;
         while done < cycles {
             // The images before the cycle, to see which breakpoints come to hold in it.
-            let (cycle, inputs, outputs) = (self.cycle, self.inputs, self.previous);
+            let watch = self.watch();
             if let Err(halt) = self.cycle(io, &mut program) {
                 return (done, Some(halt), false);
             }
             done = done.saturating_add(1);
             between(self, io);
-            let fired = breakpoints
-                .iter()
-                .find(|&&b| self.reached(b) && !Self::holds(b, cycle, &inputs, &outputs));
-            if let Some(&b) = fired {
+            if let Some(b) = watch.fired(self, breakpoints) {
                 return (done, Some(Halt::Breakpoint(b)), false);
             }
             if stop(self) {
