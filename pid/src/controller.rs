@@ -139,7 +139,7 @@ pub const STATE_BOUND: u16 = 100;
 /// A NaN or infinite set-point or measurement (the first sample included) holds the output, sets a
 /// [`Faults`] flag and leaves every state as it was, so the controller runs on as soon as the
 /// inputs are finite again; `update` never returns NaN or infinity. A `Pid<T>` holds 19 values of
-/// `T` and 5 bytes of flags, padded to `T`'s alignment: 84 bytes for `f32`, 160 for `f64` and
+/// `T` and 4 bytes of flags, padded to `T`'s alignment: 80 bytes for `f32`, 160 for `f64` and
 /// `I32F32`.
 ///
 /// ```
@@ -176,9 +176,6 @@ pub struct Pid<T> {
     i_lo: T,
     i_hi: T,
     d_bound: T,
-    /// Whether the kind has I; the others hold a constant bias (their manual reset), bounded
-    /// only where it is set.
-    integrates: bool,
     i: T,
     d: T,
     y_old: T,
@@ -206,7 +203,6 @@ struct Coefficients<T> {
     i_lo: T,
     i_hi: T,
     d_bound: T,
-    integrates: bool,
 }
 
 #[allow(
@@ -299,7 +295,6 @@ impl<T: Scalar> Coefficients<T> {
             } else {
                 T::MAX
             },
-            integrates: kind.has_i(),
             d_bound: T::from_real(bound),
         })
     }
@@ -358,7 +353,6 @@ impl<T: Scalar> Pid<T> {
             i_lo: k.i_lo,
             i_hi: k.i_hi,
             d_bound: k.d_bound,
-            integrates: k.integrates,
             i: T::ZERO,
             d: T::ZERO,
             y_old: T::ZERO,
@@ -389,7 +383,6 @@ impl<T: Scalar> Pid<T> {
         self.i_lo = k.i_lo;
         self.i_hi = k.i_hi;
         self.d_bound = k.d_bound;
-        self.integrates = k.integrates;
     }
 
     /// One sample: the output for set-point `r` and measurement `y`.
@@ -493,6 +486,13 @@ impl<T: Scalar> Pid<T> {
         };
     }
 
+    /// Whether the kind has I (the others hold a constant bias, their manual reset, bounded only
+    /// where it is set). Exactly the kinds with a tracking coefficient: `new` refuses an `ao`
+    /// that vanishes for them.
+    fn integrates(&self) -> bool {
+        self.ao != T::ZERO
+    }
+
     /// `i` within the integral's bounds at the last set-point, or for a kind without I (whose
     /// bias a spike must not hold at a limit for good) within [`STATE_BOUND`] scales of the output
     /// limits; a non-finite `i` (a new gain so large that the bumpless adjustment overflowed)
@@ -500,7 +500,7 @@ impl<T: Scalar> Pid<T> {
     fn bounded_integral(&self, i: T) -> T {
         // A kind without I never moves its bias again, so its bounds must not follow a set-point
         // that may have been absurd: they sit around the output limits themselves.
-        let (lo, hi) = if self.integrates {
+        let (lo, hi) = if self.integrates() {
             self.integral_bounds(self.r_old, T::ZERO)
         } else {
             (self.ymin.sub(self.d_bound), self.ymax.add(self.d_bound))
@@ -634,9 +634,9 @@ mod tests {
     }
 
     #[test]
-    fn size_is_19_values_and_5_bytes_padded() {
-        // 19 values of T, then 3 flags, the mode and the faults (5 bytes), padded to T's alignment.
-        assert_eq!(core::mem::size_of::<Pid<f32>>(), 19 * 4 + 8);
+    fn size_is_19_values_and_4_bytes_padded() {
+        // 19 values of T, then 2 flags, the mode and the faults (4 bytes), padded to T's alignment.
+        assert_eq!(core::mem::size_of::<Pid<f32>>(), 19 * 4 + 4);
         assert_eq!(core::mem::size_of::<Pid<f64>>(), 19 * 8 + 8);
     }
 
