@@ -125,7 +125,7 @@ impl<const IW: usize, const OW: usize> BreakpointWatch<IW, OW> {
 
 /// What supervises a cycle from outside it: nothing ([`Executive::cycle`]) or [`Signals`]
 /// ([`Executive::cycle_with`]).
-trait Supervision<const IW: usize> {
+pub(crate) trait Supervision<const IW: usize> {
     fn halted(&self) -> Option<Halt>;
     fn take_captured(&self) -> Option<[u16; IW]>;
     fn write_unless_tripped(&self, write: impl FnOnce()) -> bool;
@@ -147,21 +147,6 @@ impl<const IW: usize> Supervision<IW> for Unsupervised {
         true
     }
     fn kick(&self, _now_us: u32) {}
-}
-
-impl<const IW: usize, const OW: usize> Supervision<IW> for Signals<IW, OW> {
-    fn halted(&self) -> Option<Halt> {
-        Signals::halted(self)
-    }
-    fn take_captured(&self) -> Option<[u16; IW]> {
-        Some(Signals::take_captured(self))
-    }
-    fn write_unless_tripped(&self, write: impl FnOnce()) -> bool {
-        Signals::write_unless_tripped(self, write)
-    }
-    fn kick(&self, now_us: u32) {
-        Signals::kick(self, now_us);
-    }
 }
 
 impl fmt::Display for Breakpoint {

@@ -5,7 +5,7 @@ use core::cell::Cell;
 
 use critical_section::Mutex;
 
-use crate::executive::{CycleConfig, Halt};
+use crate::executive::{CycleConfig, Halt, Supervision};
 use crate::image::Image;
 
 #[derive(Clone, Copy)]
@@ -46,13 +46,15 @@ struct Shared<const IW: usize> {
 /// }
 /// let mut plant = Plant { t: 0, out: [0] };
 /// let mut plc: Executive<1, 1> = Executive::new(CycleConfig::source());
-/// plc.cycle_with(&mut plant, &SIGNALS, |scan| scan.outputs.set(0, true).unwrap())?;
+/// plc.cycle_with(&mut plant, &SIGNALS, |scan| {
+///     scan.outputs.set(0, true).ok(); // point 0 exists: an error is impossible here
+/// })?;
 /// assert_eq!(plant.out, [1]);
 ///
 /// // The program hangs; the timer interrupt checks 150 ms after the last cycle ended.
 /// let result = plc.cycle_with(&mut plant, &SIGNALS, |scan| {
 ///     assert!(SIGNALS.check_watchdog(150_000)); // (inside the interrupt handler)
-///     scan.outputs.set(0, true).unwrap();
+///     scan.outputs.set(0, true).ok();
 /// });
 /// assert_eq!(result, Err(Halt::Watchdog)); // the cycle wrote nothing after the trip
 /// assert_eq!(SIGNALS.safe_outputs().words(), &[0]); // what the handler wrote
@@ -181,9 +183,11 @@ impl<const IW: usize, const OW: usize> Signals<IW, OW> {
     pub const fn safe_outputs(&self) -> &Image<OW> {
         &self.safe_outputs
     }
+}
 
-    /// Why cycles are refused, if they are.
-    pub(crate) fn halted(&self) -> Option<Halt> {
+/// The executive's side of the shared state, used by [`Executive::cycle_with`](crate::Executive::cycle_with).
+impl<const IW: usize, const OW: usize> Supervision<IW> for Signals<IW, OW> {
+    fn halted(&self) -> Option<Halt> {
         let s = self.read();
         if s.power_failed {
             Some(Halt::PowerFail)
@@ -194,14 +198,13 @@ impl<const IW: usize, const OW: usize> Signals<IW, OW> {
         }
     }
 
-    /// The inputs captured since the last call, cleared.
-    pub(crate) fn take_captured(&self) -> [u16; IW] {
-        self.update(|s| core::mem::replace(&mut s.captured, [0; IW]))
+    fn take_captured(&self) -> Option<[u16; IW]> {
+        Some(self.update(|s| core::mem::replace(&mut s.captured, [0; IW])))
     }
 
-    /// Runs `write` unless the watchdog has tripped, in one critical section; returns whether
-    /// it ran.
-    pub(crate) fn write_unless_tripped(&self, write: impl FnOnce()) -> bool {
+    /// The trip check and the write in one critical section: an interrupt cannot trip the
+    /// watchdog between them.
+    fn write_unless_tripped(&self, write: impl FnOnce()) -> bool {
         critical_section::with(|cs| {
             if self.shared.borrow(cs).get().tripped {
                 false
@@ -212,8 +215,7 @@ impl<const IW: usize, const OW: usize> Signals<IW, OW> {
         })
     }
 
-    /// A cycle finished at `now_us`.
-    pub(crate) fn kick(&self, now_us: u32) {
+    fn kick(&self, now_us: u32) {
         self.update(|s| s.kicked_us = Some(now_us));
     }
 }
