@@ -698,15 +698,15 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
     pub fn restore(&mut self, snapshot: &Snapshot<K, N, T>) -> Result<(), TrackerError> {
         let da = self.table.corrected(snapshot.dia)?;
         let tippers = self.table.tippers();
+        // The table's tippers only (the arrays run to the capacity T).
+        let distances = da.get(..tippers).unwrap_or(&[]);
         let mut last = [0u32; T];
         for t in &snapshot.in_flight {
-            let (Some(&distance), Some(previous)) = (da.get(t.tipper), last.get_mut(t.tipper))
+            let (Some(&distance), Some(previous)) =
+                (distances.get(t.tipper), last.get_mut(t.tipper))
             else {
                 return Err(TrackerError::UnknownTipper { tipper: t.tipper });
             };
-            if t.tipper >= tippers {
-                return Err(TrackerError::UnknownTipper { tipper: t.tipper });
-            }
             if t.remaining == 0 {
                 return Err(TrackerError::ZeroRemaining);
             }

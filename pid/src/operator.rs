@@ -705,8 +705,9 @@ impl<T: Scalar, F: Real> Station<T, F> {
     /// [`refused_commit`](Station::refused_commit) says why. A non-finite `xin` holds the output
     /// and raises the controller's non-finite-input fault and the alarm.
     pub fn sample(&mut self, xin: F) -> F {
-        let previous = self.staged.active;
-        if let Some(p) = self.staged.take_commit() {
+        // The active set is copied only when a commit may have to be refused.
+        let previous = self.staged.commit_pending().then_some(self.staged.active);
+        if let (Some(previous), Some(p)) = (previous, self.staged.take_commit()) {
             match self.pid.set_config(&p.config) {
                 Ok(()) => {
                     self.commits = self.commits.saturating_add(1);
