@@ -338,32 +338,36 @@ impl<T: Scalar> Pid<T> {
     /// [`TOLERANCE`]; otherwise [`ConfigError::Unrepresentable`] names the parameter.
     pub fn new<F: Real>(config: &Config<F>) -> Result<Pid<T>, ConfigError<F>> {
         let k = Coefficients::<T>::new(config)?;
+        // One mapping from coefficients to fields (`apply`, as `set_config` uses it), then the
+        // state at construction (`reset`).
+        let zero = T::ZERO;
         let mut pid = Pid {
-            kp: k.kp,
-            b: k.b,
-            c: k.c,
-            bi: k.bi,
-            ad: k.ad,
-            bd: k.bd,
-            ao: k.ao,
-            ymin: k.ymin,
-            ymax: k.ymax,
-            dymax: k.dymax.unwrap_or(T::ZERO),
-            offset_slope: k.offset_slope,
-            i_lo: k.i_lo,
-            i_hi: k.i_hi,
-            d_bound: k.d_bound,
-            i: T::ZERO,
-            d: T::ZERO,
-            y_old: T::ZERO,
-            r_old: T::ZERO,
-            u_old: T::ZERO,
-            has_dymax: k.dymax.is_some(),
+            kp: zero,
+            b: zero,
+            c: zero,
+            bi: zero,
+            ad: zero,
+            bd: zero,
+            ao: zero,
+            ymin: zero,
+            ymax: zero,
+            dymax: zero,
+            offset_slope: zero,
+            i_lo: zero,
+            i_hi: zero,
+            d_bound: zero,
+            i: zero,
+            d: zero,
+            y_old: zero,
+            r_old: zero,
+            u_old: zero,
+            has_dymax: false,
             started: false,
             mode: Mode::Auto,
             faults: Faults::default(),
         };
-        pid.u_old = T::ZERO.clamp_within(pid.ymin, pid.ymax);
+        pid.apply(k);
+        pid.reset();
         Ok(pid)
     }
 
