@@ -1,0 +1,464 @@
+//! The request/refill messages between a slave and its master, carrying cumulative counters.
+//!
+//! The source's level-1 board asks for "one more byte" every time it sends one to the machine.
+//! Over a link that loses, repeats or reorders messages such edges drift: a lost request is a
+//! byte never sent, a repeated one a byte sent twice. Here every message says where it stands
+//! instead:
+//!
+//! * a [`Report`] (slave → master) carries the slave's **consumed** and **received** totals
+//!   (wrapping `u16`); the master owes `consumed + capacity − sent` items, whatever happened to
+//!   the reports before it, and ignores a report older than one it has seen;
+//! * a [`Refill`] (master → slave) carries the stream index of its first item; the slave takes
+//!   an item only if its index is the next one it expects, so an item that arrives twice is not
+//!   consumed twice and one that arrives early (after a loss) is not taken out of order.
+//!
+//! Frames (all integers little-endian, CRC-16/CCITT-FALSE over everything before it):
+//!
+//! | frame | bytes |
+//! |---|---|
+//! | report | `0xA5`, slave, consumed (2), received (2), flags, CRC (2) — 9 bytes; flags bit 0 = stand-alone, bit 1 = retry, others 0 |
+//! | refill | `0x5A`, slave, first index (2), count n (0..=[`MAX_REFILL`]), n items, CRC (2) — 7 + n bytes; n = 0 is a keep-alive |
+//!
+//! The CRC detects every error of up to 3 bits in a frame of this size and every burst of up to
+//! 16 bits.
+
+use core::fmt;
+
+/// Bytes in a report frame.
+pub const REPORT_LEN: usize = 9;
+/// The most items one refill frame carries.
+pub const MAX_REFILL: usize = 64;
+/// Bytes in the longest frame (a full refill).
+pub const MAX_FRAME: usize = REFILL_OVERHEAD + MAX_REFILL;
+
+const REPORT_TAG: u8 = 0xA5;
+const REFILL_TAG: u8 = 0x5A;
+const REFILL_HEADER: usize = 5;
+const REFILL_OVERHEAD: usize = REFILL_HEADER + 2;
+const FLAG_STANDALONE: u8 = 0x01;
+const FLAG_RETRY: u8 = 0x02;
+
+/// A slave's request: where it stands, as cumulative wrapping counts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Report {
+    /// The slave's address.
+    pub slave: u8,
+    /// Stream items used up (consumed, or skipped after an underrun), wrapping.
+    pub consumed: u16,
+    /// Stream items taken into the ring: the index of the next item the slave will accept.
+    pub received: u16,
+    /// The slave is running from its local pattern (the master was silent too long).
+    pub standalone: bool,
+    /// The slave has waited for a refill longer than its retry time, or saw a gap: the master
+    /// should send again from `received`.
+    pub retry: bool,
+}
+
+/// The master's refill: items of the stream, starting at index `first`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Refill<'a> {
+    /// The slave's address.
+    pub slave: u8,
+    /// Stream index (wrapping) of `items[0]`.
+    pub first: u16,
+    /// Up to [`MAX_REFILL`] items; none is a keep-alive ("the master is here").
+    pub items: &'a [u8],
+}
+
+/// A decoded frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Message<'a> {
+    /// Slave → master.
+    Report(Report),
+    /// Master → slave.
+    Refill(Refill<'a>),
+}
+
+/// Why a frame was refused by [`decode`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum DecodeError {
+    /// No bytes at all.
+    Empty,
+    /// The first byte is neither a report (`0xA5`) nor a refill (`0x5A`) tag.
+    UnknownTag(u8),
+    /// The frame is not as long as its tag and count say.
+    Length {
+        /// Bytes the frame should have.
+        expected: usize,
+        /// Bytes it has.
+        got: usize,
+    },
+    /// A refill's count is above [`MAX_REFILL`].
+    TooManyItems(u8),
+    /// The CRC does not match: the frame was damaged.
+    Checksum {
+        /// The CRC carried in the frame.
+        carried: u16,
+        /// The CRC of the bytes received.
+        computed: u16,
+    },
+    /// A report's flag byte has bits set that mean nothing.
+    ReservedFlags(u8),
+}
+
+impl fmt::Display for DecodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Empty => write!(f, "empty frame"),
+            Self::UnknownTag(tag) => {
+                write!(f, "unknown frame tag {tag:#04x} (0xa5 report, 0x5a refill)")
+            }
+            Self::Length { expected, got } => {
+                write!(f, "frame length: expected {expected} bytes, got {got}")
+            }
+            Self::TooManyItems(n) => write!(f, "refill of {n} items (at most {MAX_REFILL})"),
+            Self::Checksum { carried, computed } => {
+                write!(
+                    f,
+                    "CRC mismatch: frame carries {carried:#06x}, bytes give {computed:#06x}"
+                )
+            }
+            Self::ReservedFlags(flags) => write!(f, "report flags {flags:#04x} use reserved bits"),
+        }
+    }
+}
+
+impl core::error::Error for DecodeError {}
+
+/// Why a frame could not be encoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum EncodeError {
+    /// The output buffer is too short.
+    BufferTooSmall {
+        /// Bytes the frame needs.
+        needed: usize,
+        /// Bytes the buffer has.
+        got: usize,
+    },
+    /// A refill of more than [`MAX_REFILL`] items.
+    TooManyItems(usize),
+}
+
+impl fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::BufferTooSmall { needed, got } => {
+                write!(f, "buffer of {got} bytes, the frame needs {needed}")
+            }
+            Self::TooManyItems(n) => write!(f, "refill of {n} items (at most {MAX_REFILL})"),
+        }
+    }
+}
+
+impl core::error::Error for EncodeError {}
+
+/// CRC-16/CCITT-FALSE (polynomial 0x1021, initial value 0xFFFF, no reflection).
+#[must_use]
+pub fn crc16(bytes: &[u8]) -> u16 {
+    let mut crc: u16 = 0xFFFF;
+    for &byte in bytes {
+        crc ^= u16::from(byte) << 8;
+        for _ in 0..8 {
+            crc = if crc & 0x8000 == 0 {
+                crc << 1
+            } else {
+                (crc << 1) ^ 0x1021
+            };
+        }
+    }
+    crc
+}
+
+fn seal(frame: &mut [u8]) -> Option<()> {
+    let (body, tail) = frame.split_at_mut_checked(frame.len().checked_sub(2)?)?;
+    tail.copy_from_slice(&crc16(body).to_le_bytes());
+    Some(())
+}
+
+impl Report {
+    /// Writes the 9-byte frame into `out`; returns its length.
+    ///
+    /// # Errors
+    /// [`EncodeError::BufferTooSmall`] when `out` is shorter than [`REPORT_LEN`].
+    pub fn encode(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
+        let got = out.len();
+        let frame = out
+            .get_mut(..REPORT_LEN)
+            .ok_or(EncodeError::BufferTooSmall {
+                needed: REPORT_LEN,
+                got,
+            })?;
+        let [c0, c1] = self.consumed.to_le_bytes();
+        let [r0, r1] = self.received.to_le_bytes();
+        let mut flags = 0;
+        if self.standalone {
+            flags |= FLAG_STANDALONE;
+        }
+        if self.retry {
+            flags |= FLAG_RETRY;
+        }
+        frame.copy_from_slice(&[REPORT_TAG, self.slave, c0, c1, r0, r1, flags, 0, 0]);
+        seal(frame).map_or(
+            Err(EncodeError::BufferTooSmall {
+                needed: REPORT_LEN,
+                got: 0,
+            }),
+            |()| Ok(REPORT_LEN),
+        )
+    }
+}
+
+impl Refill<'_> {
+    /// Writes the frame (7 + items bytes) into `out`; returns its length.
+    ///
+    /// # Errors
+    /// [`EncodeError::TooManyItems`] for more than [`MAX_REFILL`] items,
+    /// [`EncodeError::BufferTooSmall`] when `out` cannot hold the frame.
+    pub fn encode(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
+        let count = u8::try_from(self.items.len())
+            .ok()
+            .filter(|&n| usize::from(n) <= MAX_REFILL)
+            .ok_or(EncodeError::TooManyItems(self.items.len()))?;
+        let needed = REFILL_OVERHEAD.saturating_add(self.items.len());
+        let got = out.len();
+        let frame = out
+            .get_mut(..needed)
+            .ok_or(EncodeError::BufferTooSmall { needed, got })?;
+        let [f0, f1] = self.first.to_le_bytes();
+        let (header, rest) = frame.split_at_mut(REFILL_HEADER);
+        header.copy_from_slice(&[REFILL_TAG, self.slave, f0, f1, count]);
+        let (items, _crc) = rest.split_at_mut(self.items.len());
+        items.copy_from_slice(self.items);
+        seal(frame).map_or(Err(EncodeError::BufferTooSmall { needed, got }), |()| {
+            Ok(needed)
+        })
+    }
+}
+
+/// Checks and decodes one frame: tag, length, count, CRC and flags, in that order; the first
+/// rule broken is the error. Never panics, never reads past `bytes`.
+///
+/// # Errors
+/// The [`DecodeError`] naming the rule that failed.
+pub fn decode(bytes: &[u8]) -> Result<Message<'_>, DecodeError> {
+    let (&tag, _) = bytes.split_first().ok_or(DecodeError::Empty)?;
+    let expected = match tag {
+        REPORT_TAG => REPORT_LEN,
+        REFILL_TAG => {
+            let &count = bytes
+                .get(REFILL_HEADER.saturating_sub(1))
+                .ok_or(DecodeError::Length {
+                    expected: REFILL_OVERHEAD,
+                    got: bytes.len(),
+                })?;
+            if usize::from(count) > MAX_REFILL {
+                return Err(DecodeError::TooManyItems(count));
+            }
+            REFILL_OVERHEAD.saturating_add(usize::from(count))
+        }
+        other => return Err(DecodeError::UnknownTag(other)),
+    };
+    if bytes.len() != expected {
+        return Err(DecodeError::Length {
+            expected,
+            got: bytes.len(),
+        });
+    }
+    let (body, crc) =
+        bytes
+            .split_at_checked(expected.saturating_sub(2))
+            .ok_or(DecodeError::Length {
+                expected,
+                got: bytes.len(),
+            })?;
+    let carried = match *crc {
+        [a, b] => u16::from_le_bytes([a, b]),
+        _ => {
+            return Err(DecodeError::Length {
+                expected,
+                got: bytes.len(),
+            });
+        }
+    };
+    let computed = crc16(body);
+    if carried != computed {
+        return Err(DecodeError::Checksum { carried, computed });
+    }
+    match *body {
+        [REPORT_TAG, slave, c0, c1, r0, r1, flags] => {
+            if flags & !(FLAG_STANDALONE | FLAG_RETRY) != 0 {
+                return Err(DecodeError::ReservedFlags(flags));
+            }
+            Ok(Message::Report(Report {
+                slave,
+                consumed: u16::from_le_bytes([c0, c1]),
+                received: u16::from_le_bytes([r0, r1]),
+                standalone: flags & FLAG_STANDALONE != 0,
+                retry: flags & FLAG_RETRY != 0,
+            }))
+        }
+        [REFILL_TAG, slave, f0, f1, _count, ref items @ ..] => Ok(Message::Refill(Refill {
+            slave,
+            first: u16::from_le_bytes([f0, f1]),
+            items,
+        })),
+        _ => Err(DecodeError::Length {
+            expected,
+            got: bytes.len(),
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crc_check_value() {
+        // The catalogue's check value for CRC-16/CCITT-FALSE ("123456789").
+        assert_eq!(crc16(b"123456789"), 0x29B1);
+    }
+
+    #[test]
+    fn round_trips() {
+        let report = Report {
+            slave: 7,
+            consumed: 65_535,
+            received: 3,
+            standalone: true,
+            retry: false,
+        };
+        let mut buf = [0; MAX_FRAME];
+        let n = report.encode(&mut buf).unwrap();
+        assert_eq!(decode(&buf[..n]), Ok(Message::Report(report)));
+        let items = [1, 2, 3, 255];
+        let refill = Refill {
+            slave: 2,
+            first: 40_000,
+            items: &items,
+        };
+        let n = refill.encode(&mut buf).unwrap();
+        assert_eq!(n, 11);
+        assert_eq!(decode(&buf[..n]), Ok(Message::Refill(refill)));
+        let keep_alive = Refill {
+            slave: 2,
+            first: 0,
+            items: &[],
+        };
+        let n = keep_alive.encode(&mut buf).unwrap();
+        assert_eq!(decode(&buf[..n]), Ok(Message::Refill(keep_alive)));
+    }
+
+    #[test]
+    fn every_rule_has_its_error() {
+        let mut buf = [0; MAX_FRAME];
+        assert_eq!(decode(&[]), Err(DecodeError::Empty));
+        assert_eq!(decode(&[0x00]), Err(DecodeError::UnknownTag(0)));
+        assert_eq!(
+            decode(&[REPORT_TAG, 1]),
+            Err(DecodeError::Length {
+                expected: 9,
+                got: 2
+            })
+        );
+        assert_eq!(
+            decode(&[REFILL_TAG, 1, 0]),
+            Err(DecodeError::Length {
+                expected: 7,
+                got: 3
+            })
+        );
+        assert_eq!(
+            decode(&[REFILL_TAG, 1, 0, 0, 65]),
+            Err(DecodeError::TooManyItems(65))
+        );
+        let n = Report {
+            slave: 1,
+            consumed: 2,
+            received: 3,
+            standalone: false,
+            retry: true,
+        }
+        .encode(&mut buf)
+        .unwrap();
+        buf[2] ^= 0x10;
+        assert!(matches!(
+            decode(&buf[..n]),
+            Err(DecodeError::Checksum { .. })
+        ));
+        buf[2] ^= 0x10;
+        buf[6] = 0x80;
+        let crc = crc16(&buf[..7]).to_le_bytes();
+        buf[7..9].copy_from_slice(&crc);
+        assert_eq!(decode(&buf[..n]), Err(DecodeError::ReservedFlags(0x80)));
+        assert_eq!(
+            Refill {
+                slave: 0,
+                first: 0,
+                items: &[0; 65]
+            }
+            .encode(&mut buf),
+            Err(EncodeError::TooManyItems(65))
+        );
+        assert_eq!(
+            Refill {
+                slave: 0,
+                first: 0,
+                items: &[0; 4]
+            }
+            .encode(&mut buf[..10]),
+            Err(EncodeError::BufferTooSmall {
+                needed: 11,
+                got: 10
+            })
+        );
+    }
+
+    #[test]
+    fn every_error_of_one_and_two_bits_is_caught() {
+        // Exhaustive over every position of a report and of a 4-item refill.
+        let mut frames: [([u8; MAX_FRAME], usize); 2] = [([0; MAX_FRAME], 0); 2];
+        frames[0].1 = Report {
+            slave: 9,
+            consumed: 513,
+            received: 770,
+            standalone: false,
+            retry: false,
+        }
+        .encode(&mut frames[0].0)
+        .unwrap();
+        frames[1].1 = Refill {
+            slave: 9,
+            first: 1234,
+            items: &[0xAA, 0x55, 0, 0xFF],
+        }
+        .encode(&mut frames[1].0)
+        .unwrap();
+        for (frame, n) in frames {
+            let original = decode(&frame[..n]).unwrap();
+            let bits = n * 8;
+            for i in 0..bits {
+                for j in i..bits {
+                    let mut damaged = frame;
+                    damaged[i / 8] ^= 1 << (i % 8);
+                    if j != i {
+                        damaged[j / 8] ^= 1 << (j % 8);
+                    }
+                    let decoded = decode(&damaged[..n]);
+                    assert!(
+                        decoded.is_err(),
+                        "bits {i},{j}: {decoded:?} (was {original:?})"
+                    );
+                }
+            }
+        }
+    }
+}

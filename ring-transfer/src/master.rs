@@ -1,0 +1,549 @@
+//! The master: one link, many slaves, earliest deadline first.
+
+use core::fmt;
+
+use crate::edf::Edf;
+use crate::link::Report;
+
+/// What the master must know of a slave: its ring size and how fast it consumes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SlaveParams {
+    /// Ring slots (1..=32 767: the wrapping 16-bit counters tell old from new within half
+    /// their range).
+    pub capacity: u16,
+    /// Time per item consumed, in the master's time unit (≥ 1).
+    pub t0: u32,
+}
+
+/// Why the master refused a call.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum MasterError {
+    /// The index is not below the master's slave capacity `S`.
+    UnknownSlave(usize),
+    /// No [`Master::attach`] for this slave (or it was detached).
+    NotAttached(usize),
+    /// A ring of 0 slots, or above 32 767.
+    Capacity(u16),
+    /// `t0` = 0: a slave that consumes infinitely fast cannot be served.
+    ZeroRate,
+}
+
+impl fmt::Display for MasterError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::UnknownSlave(i) => write!(f, "slave {i} is beyond the master's capacity"),
+            Self::NotAttached(i) => write!(f, "slave {i} is not attached"),
+            Self::Capacity(c) => write!(f, "ring capacity must be 1..=32767 slots, got {c}"),
+            Self::ZeroRate => write!(f, "t0 must be at least 1 time unit per item"),
+        }
+    }
+}
+
+impl core::error::Error for MasterError {}
+
+/// What the master made of a report.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ReportOutcome {
+    /// The newest word from this slave: `owed` items are now owed to it. With nothing owed, answer
+    /// with an empty refill (a keep-alive) so a slave running stand-alone knows the master is back.
+    Accepted {
+        /// Items the slave has room for and the master has not yet sent.
+        owed: u32,
+    },
+    /// Older than, or the same as, a report already seen (a late or repeated message): ignored.
+    /// (A stand-alone slave's periodic report is never stale: it asks for a keep-alive.)
+    Stale,
+}
+
+/// A decision of the scheduler: send `count` items of `slave`'s stream from index `first`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Grant {
+    /// The slave served.
+    pub slave: usize,
+    /// Stream index (64-bit, never wraps in practice) of the first item; the frame carries its
+    /// low 16 bits ([`Grant::first_wire`]).
+    pub first: u64,
+    /// Items to send (≥ 1).
+    pub count: u32,
+    /// The deadline this grant served (the source's `slack · t0` after the slave's report).
+    pub deadline: u64,
+    /// `true` when the grant came after its deadline: the slave may underrun. Counted in
+    /// [`SlaveStatus::missed`].
+    pub late: bool,
+}
+
+impl Grant {
+    /// The low 16 bits of `first`, as a refill frame carries them.
+    #[must_use]
+    pub fn first_wire(&self) -> u16 {
+        low16(self.first)
+    }
+}
+
+/// One slave as the master sees it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SlaveStatus {
+    /// Attached and heard from at least once.
+    pub linked: bool,
+    /// Items owed now.
+    pub owed: u32,
+    /// When the next item is due, if any is owed.
+    pub deadline: Option<u64>,
+    /// Grants made after their deadline.
+    pub missed: u32,
+    /// The latest of those, by how much.
+    pub worst_lateness: u64,
+    /// The slave's last report said it runs stand-alone.
+    pub standalone: bool,
+    /// Reports accepted.
+    pub reports: u32,
+    /// Reports ignored as late or repeated.
+    pub stale_reports: u32,
+    /// Retry reports (the slave waited too long or saw a gap): the master sent again.
+    pub retries: u32,
+    /// Stream items the slave has consumed (or skipped), as of its last report.
+    pub consumed: u64,
+    /// Stream items the slave had taken in, as of its last report.
+    pub received: u64,
+    /// Stream items granted (the next index to send).
+    pub sent: u64,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Link {
+    params: Option<SlaveParams>,
+    status: SlaveStatus,
+    report_at: u64,
+}
+
+impl Link {
+    const DETACHED: Self = Self {
+        params: None,
+        status: SlaveStatus {
+            linked: false,
+            owed: 0,
+            deadline: None,
+            missed: 0,
+            worst_lateness: 0,
+            standalone: false,
+            reports: 0,
+            stale_reports: 0,
+            retries: 0,
+            consumed: 0,
+            received: 0,
+            sent: 0,
+        },
+        report_at: 0,
+    };
+
+    fn owed(&self) -> u32 {
+        let Some(params) = self.params else { return 0 };
+        let room = self
+            .status
+            .consumed
+            .saturating_add(u64::from(params.capacity));
+        u32::try_from(room.saturating_sub(self.status.sent)).unwrap_or(u32::MAX)
+    }
+
+    /// The source's rule: the slave holds (or will hold, counting items in flight) `sent −
+    /// consumed` items at its last report; the next one is due that many periods after it.
+    fn deadline(&self) -> Option<u64> {
+        let params = self.params?;
+        if !self.status.linked || self.owed() == 0 {
+            return None;
+        }
+        let ahead = self.status.sent.saturating_sub(self.status.consumed);
+        Some(
+            self.report_at
+                .saturating_add(ahead.saturating_mul(u64::from(params.t0))),
+        )
+    }
+}
+
+fn low16(x: u64) -> u16 {
+    let [a, b, ..] = x.to_le_bytes();
+    u16::from_le_bytes([a, b])
+}
+
+/// Extends a wrapping 16-bit count to 64 bits next to the last known value; `None` if it lies
+/// behind it (an older message).
+fn extend(known: u64, wire: u16) -> Option<u64> {
+    let ahead = wire.wrapping_sub(low16(known));
+    (ahead < 0x8000).then(|| known.saturating_add(u64::from(ahead)))
+}
+
+/// The master of source 001, generalised: up to `S` slaves on one link, each with its own ring
+/// size and rate; [`next_refill`](Self::next_refill) always serves the slave whose ring would
+/// run dry first (earliest deadline first) in O(log S), and counts every grant that came late.
+///
+/// Time is a `u64` in any unit the caller likes (the same unit as each slave's `t0`).
+///
+/// ```
+/// use regler_ring_transfer::{Master, Report, SlaveParams};
+///
+/// let mut master: Master<8> = Master::new();
+/// master.attach(0, SlaveParams { capacity: 256, t0: 2_300 })?; // µs per needle
+/// master.attach(1, SlaveParams { capacity: 64, t0: 2_100 })?;
+/// let report = |slave: u8, consumed, received| {
+///     Report { slave, consumed, received, standalone: false, retry: false }
+/// };
+/// // Both start empty and are filled.
+/// for slave in 0..2 {
+///     master.on_report(0, slave, &report(slave as u8, 0, 0))?;
+/// }
+/// while master.next_refill(0, 64).is_some() {}
+/// // Ten needles later each has used ten items: the smaller ring runs dry first.
+/// master.on_report(23_000, 0, &report(0, 10, 256))?;
+/// master.on_report(21_000, 1, &report(1, 10, 64))?;
+/// let grant = master.next_refill(21_000, 64).unwrap();
+/// assert_eq!((grant.slave, grant.first, grant.count), (1, 64, 10));
+/// assert_eq!(grant.deadline, 21_000 + 54 * 2_100); // 54 items left, 2.1 ms each
+/// # Ok::<(), regler_ring_transfer::MasterError>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Master<const S: usize> {
+    links: [Link; S],
+    edf: Edf<S>,
+}
+
+impl<const S: usize> Default for Master<S> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const S: usize> Master<S> {
+    /// A master with no slaves attached; `const`, so it can live in a `static`.
+    #[must_use]
+    pub const fn new() -> Self {
+        Self {
+            links: [Link::DETACHED; S],
+            edf: Edf::new(),
+        }
+    }
+
+    /// Attaches (or re-attaches) slave `slave`. It is served once its first report arrives,
+    /// which sets the master's view of its counters.
+    ///
+    /// # Errors
+    /// [`MasterError::UnknownSlave`] past `S`, [`MasterError::Capacity`] for a ring of 0 or
+    /// more than 32 767 slots, [`MasterError::ZeroRate`] for `t0` = 0.
+    pub fn attach(&mut self, slave: usize, params: SlaveParams) -> Result<(), MasterError> {
+        if params.capacity == 0 || params.capacity > 0x7FFF {
+            return Err(MasterError::Capacity(params.capacity));
+        }
+        if params.t0 == 0 {
+            return Err(MasterError::ZeroRate);
+        }
+        let link = self
+            .links
+            .get_mut(slave)
+            .ok_or(MasterError::UnknownSlave(slave))?;
+        *link = Link {
+            params: Some(params),
+            ..Link::DETACHED
+        };
+        self.edf.set(slave, u64::MAX);
+        Ok(())
+    }
+
+    /// Forgets a slave (it is never served until attached again).
+    ///
+    /// # Errors
+    /// [`MasterError::UnknownSlave`] past `S`.
+    pub fn detach(&mut self, slave: usize) -> Result<(), MasterError> {
+        let link = self
+            .links
+            .get_mut(slave)
+            .ok_or(MasterError::UnknownSlave(slave))?;
+        *link = Link::DETACHED;
+        self.edf.set(slave, u64::MAX);
+        Ok(())
+    }
+
+    /// Re-initialises a slave's interface (the source's Shift 1–8): its counters are taken
+    /// afresh from its next report; statistics start again. The parameters stay.
+    ///
+    /// # Errors
+    /// [`MasterError::UnknownSlave`] or [`MasterError::NotAttached`].
+    pub fn reinit(&mut self, slave: usize) -> Result<(), MasterError> {
+        let params = self.params(slave)?;
+        self.attach(slave, params)
+    }
+
+    fn params(&self, slave: usize) -> Result<SlaveParams, MasterError> {
+        self.links
+            .get(slave)
+            .ok_or(MasterError::UnknownSlave(slave))?
+            .params
+            .ok_or(MasterError::NotAttached(slave))
+    }
+
+    /// Takes a slave's report received at `now`. The first report after `attach` sets the
+    /// counters; after that a report counts only if it is newer than every one before it, so
+    /// any pattern of lost, repeated and reordered reports leaves the master owing exactly what
+    /// the newest report says. A retry report makes the master send again from the slave's
+    /// `received` count (a refill was lost); a slave that skipped items after an underrun moves
+    /// the master past them. `report.slave` is not looked at: `slave` says who sent it.
+    ///
+    /// # Errors
+    /// [`MasterError::UnknownSlave`] or [`MasterError::NotAttached`].
+    pub fn on_report(
+        &mut self,
+        now: u64,
+        slave: usize,
+        report: &Report,
+    ) -> Result<ReportOutcome, MasterError> {
+        self.params(slave)?;
+        let link = self
+            .links
+            .get_mut(slave)
+            .ok_or(MasterError::UnknownSlave(slave))?;
+        let status = &mut link.status;
+        if status.linked {
+            let (Some(consumed), Some(received)) = (
+                extend(status.consumed, report.consumed),
+                extend(status.received, report.received),
+            ) else {
+                status.stale_reports = status.stale_reports.saturating_add(1);
+                return Ok(ReportOutcome::Stale);
+            };
+            let unchanged = consumed == status.consumed && received == status.received;
+            if unchanged && !report.retry && !report.standalone {
+                status.stale_reports = status.stale_reports.saturating_add(1);
+                return Ok(ReportOutcome::Stale);
+            }
+            status.consumed = consumed;
+            status.received = received;
+        } else {
+            status.linked = true;
+            status.consumed = u64::from(report.consumed);
+            status.received = u64::from(report.received);
+            status.sent = status.received;
+        }
+        if report.retry {
+            status.retries = status.retries.saturating_add(1);
+            status.sent = status.received;
+        }
+        // Items the slave took that the master's count had not reached (skipped after an
+        // underrun, or a master restarted behind its slave): never send them again.
+        status.sent = status.sent.max(status.received);
+        status.standalone = report.standalone;
+        status.reports = status.reports.saturating_add(1);
+        link.report_at = now;
+        let owed = link.owed();
+        self.refresh(slave);
+        Ok(ReportOutcome::Accepted { owed })
+    }
+
+    fn refresh(&mut self, slave: usize) {
+        let Some(link) = self.links.get_mut(slave) else {
+            return;
+        };
+        let deadline = link.deadline();
+        link.status.owed = link.owed();
+        link.status.deadline = deadline;
+        self.edf.set(slave, deadline.unwrap_or(u64::MAX));
+    }
+
+    /// The scheduler's decision at `now`: the slave with the earliest deadline that is owed
+    /// anything gets up to `max` items (at least 1). `None` when nothing is owed. O(log S).
+    /// Pass `max` = 1 for strict EDF item by item; a larger batch saves frames when the link's
+    /// cost is per frame.
+    pub fn next_refill(&mut self, now: u64, max: u32) -> Option<Grant> {
+        let (slave, deadline) = self.edf.earliest()?;
+        let link = self.links.get_mut(slave)?;
+        let count = link.owed().min(max.max(1));
+        if count == 0 {
+            return None;
+        }
+        let late = now > deadline;
+        if late {
+            link.status.missed = link.status.missed.saturating_add(1);
+            link.status.worst_lateness =
+                link.status.worst_lateness.max(now.saturating_sub(deadline));
+        }
+        let first = link.status.sent;
+        link.status.sent = first.saturating_add(u64::from(count));
+        self.refresh(slave);
+        Some(Grant {
+            slave,
+            first,
+            count,
+            deadline,
+            late,
+        })
+    }
+
+    /// The earliest deadline of any slave, and whose it is.
+    #[must_use]
+    pub fn earliest(&self) -> Option<(usize, u64)> {
+        self.edf.earliest()
+    }
+
+    /// One slave's state and statistics.
+    ///
+    /// # Errors
+    /// [`MasterError::UnknownSlave`] or [`MasterError::NotAttached`].
+    pub fn status(&self, slave: usize) -> Result<SlaveStatus, MasterError> {
+        self.params(slave)?;
+        self.links
+            .get(slave)
+            .map(|l| l.status)
+            .ok_or(MasterError::UnknownSlave(slave))
+    }
+
+    /// Slaves attached.
+    #[must_use]
+    pub fn attached(&self) -> usize {
+        self.links.iter().filter(|l| l.params.is_some()).count()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn report(consumed: u16, received: u16) -> Report {
+        Report {
+            slave: 0,
+            consumed,
+            received,
+            standalone: false,
+            retry: false,
+        }
+    }
+
+    #[test]
+    fn parameters_are_checked() {
+        let mut m: Master<2> = Master::new();
+        assert_eq!(
+            m.attach(2, SlaveParams { capacity: 4, t0: 1 }),
+            Err(MasterError::UnknownSlave(2))
+        );
+        assert_eq!(
+            m.attach(0, SlaveParams { capacity: 0, t0: 1 }),
+            Err(MasterError::Capacity(0))
+        );
+        assert_eq!(
+            m.attach(
+                0,
+                SlaveParams {
+                    capacity: 0x8000,
+                    t0: 1
+                }
+            ),
+            Err(MasterError::Capacity(0x8000))
+        );
+        assert_eq!(
+            m.attach(0, SlaveParams { capacity: 4, t0: 0 }),
+            Err(MasterError::ZeroRate)
+        );
+        assert_eq!(
+            m.on_report(0, 1, &report(0, 0)),
+            Err(MasterError::NotAttached(1))
+        );
+        assert_eq!(m.next_refill(0, 1), None);
+    }
+
+    #[test]
+    fn owed_follows_the_newest_report_only() {
+        let mut m: Master<1> = Master::new();
+        m.attach(
+            0,
+            SlaveParams {
+                capacity: 4,
+                t0: 10,
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            m.on_report(0, 0, &report(0, 0)),
+            Ok(ReportOutcome::Accepted { owed: 4 })
+        );
+        let g = m.next_refill(0, 8).unwrap();
+        assert_eq!((g.first, g.count, g.deadline, g.late), (0, 4, 0, false));
+        assert_eq!(m.next_refill(0, 8), None);
+        // The slave took all four and used two.
+        assert_eq!(
+            m.on_report(5, 0, &report(2, 4)),
+            Ok(ReportOutcome::Accepted { owed: 2 })
+        );
+        // A late copy of an older report changes nothing.
+        assert_eq!(m.on_report(6, 0, &report(1, 4)), Ok(ReportOutcome::Stale));
+        assert_eq!(m.on_report(6, 0, &report(2, 4)), Ok(ReportOutcome::Stale));
+        let s = m.status(0).unwrap();
+        assert_eq!(
+            (s.owed, s.deadline, s.stale_reports),
+            (2, Some(5 + 2 * 10), 2)
+        );
+    }
+
+    #[test]
+    fn a_retry_sends_again_from_received() {
+        let mut m: Master<1> = Master::new();
+        m.attach(
+            0,
+            SlaveParams {
+                capacity: 4,
+                t0: 10,
+            },
+        )
+        .unwrap();
+        m.on_report(0, 0, &report(0, 0)).unwrap();
+        m.next_refill(0, 4).unwrap(); // lost on the way
+        let retry = Report {
+            retry: true,
+            ..report(0, 0)
+        };
+        assert_eq!(
+            m.on_report(50, 0, &retry),
+            Ok(ReportOutcome::Accepted { owed: 4 })
+        );
+        let g = m.next_refill(51, 4).unwrap();
+        assert_eq!((g.first, g.count), (0, 4));
+        assert!(g.late, "due at 50 + 0·t0 (the ring is empty), served at 51");
+        assert_eq!(m.status(0).unwrap().missed, 1);
+    }
+
+    #[test]
+    fn counters_wrap() {
+        let mut m: Master<1> = Master::new();
+        m.attach(
+            0,
+            SlaveParams {
+                capacity: 100,
+                t0: 1,
+            },
+        )
+        .unwrap();
+        m.on_report(0, 0, &report(65_500, 65_500)).unwrap();
+        m.next_refill(0, 100).unwrap();
+        assert_eq!(
+            m.on_report(1, 0, &report(64, 64)),
+            Ok(ReportOutcome::Accepted { owed: 100 })
+        );
+        assert_eq!(m.status(0).unwrap().consumed, 65_600);
+    }
+
+    #[test]
+    fn a_slave_that_skipped_moves_the_master_on() {
+        let mut m: Master<1> = Master::new();
+        m.attach(0, SlaveParams { capacity: 4, t0: 1 }).unwrap();
+        m.on_report(0, 0, &report(0, 0)).unwrap();
+        // Nothing sent; the slave underran three times and skipped three items.
+        assert_eq!(
+            m.on_report(3, 0, &report(3, 3)),
+            Ok(ReportOutcome::Accepted { owed: 4 })
+        );
+        assert_eq!(m.next_refill(3, 4).unwrap().first, 3);
+    }
+}

@@ -1,0 +1,570 @@
+//! A slave board: the ring, the link protocol and the stand-alone fallback in one.
+
+use core::fmt;
+
+use crate::link::{DecodeError, Message, Report, decode};
+use crate::ring::Ring;
+
+/// How a slave is set up.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SlaveConfig {
+    /// The slave's address on the link.
+    pub address: u8,
+    /// Items per row of the pattern (≥ 1): the slave changes source only at a row boundary.
+    pub row_len: u16,
+    /// Steps without a frame from the master after which it counts as silent (≥ 1).
+    pub silence_limit: u32,
+    /// Steps a slave owed items waits without a refill before it reports again with the retry
+    /// flag (≥ 1).
+    pub retry_after: u32,
+}
+
+/// Why a [`SlaveConfig`] was refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum SlaveConfigError {
+    /// `row_len` = 0.
+    ZeroRow,
+    /// `silence_limit` = 0: every step would count as silence.
+    ZeroSilenceLimit,
+    /// `retry_after` = 0: every step would be a retry.
+    ZeroRetry,
+    /// The ring has 0 slots or more than 32 767 (the 16-bit counters need half their range).
+    Capacity(usize),
+}
+
+impl fmt::Display for SlaveConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::ZeroRow => write!(f, "row_len must be at least 1 item"),
+            Self::ZeroSilenceLimit => write!(f, "silence_limit must be at least 1 step"),
+            Self::ZeroRetry => write!(f, "retry_after must be at least 1 step"),
+            Self::Capacity(n) => write!(f, "ring must have 1..=32767 slots, got {n}"),
+        }
+    }
+}
+
+impl core::error::Error for SlaveConfigError {}
+
+/// Why a frame was not taken.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum FrameError {
+    /// The frame is damaged or malformed.
+    Decode(DecodeError),
+    /// A refill for another slave (a shared line).
+    NotForMe(u8),
+    /// A report: slaves take refills only.
+    NotARefill,
+}
+
+impl fmt::Display for FrameError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Decode(e) => write!(f, "bad frame: {e}"),
+            Self::NotForMe(a) => write!(f, "refill addressed to slave {a}"),
+            Self::NotARefill => write!(f, "a report, not a refill"),
+        }
+    }
+}
+
+impl core::error::Error for FrameError {}
+
+/// Where the slave gets its items.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Mode {
+    /// From the master, through the ring.
+    Linked,
+    /// From the local pattern (the source's ROM or tape): the master was silent too long.
+    StandAlone,
+}
+
+/// Where one output item came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Source {
+    /// The master's stream, on time.
+    Master,
+    /// The local pattern, in stand-alone mode.
+    Local,
+    /// The local pattern standing in for a master item that was not there while the master
+    /// was already silent too long (the rest of the row the master's failure cut short).
+    Fallback,
+    /// The local pattern standing in for a master item that was late although the master was
+    /// not silent: an **underrun**. The master's item is skipped when it comes, so the rows
+    /// stay aligned.
+    Underrun,
+}
+
+/// One step's output.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Output {
+    /// The item for the machine.
+    pub item: u8,
+    /// Where it came from.
+    pub source: Source,
+    /// The row (counting from 0 at start, wrapping) and the position in it.
+    pub row: u32,
+    /// Position in the row.
+    pub col: u16,
+}
+
+/// A slave's statistics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SlaveStats {
+    /// Master items that were late while the master was not silent.
+    pub underruns: u32,
+    /// Items taken from the local pattern because the master had fallen silent mid-row.
+    pub fallbacks: u32,
+    /// Fewest items left in the ring after a step in linked mode (0 after an underrun).
+    pub least_slack: u16,
+    /// Rows made in stand-alone mode.
+    pub standalone_rows: u32,
+    /// Switches to stand-alone mode.
+    pub standalone_entries: u32,
+    /// Items that arrived again and were dropped.
+    pub duplicates: u32,
+    /// Refills that started beyond the next expected item (an earlier one was lost).
+    pub gaps: u32,
+    /// Items dropped because the ring was full (a master that sent more than owed).
+    pub overflows: u32,
+    /// Frames refused as damaged or malformed.
+    pub bad_frames: u32,
+    /// Reports sent with the retry flag.
+    pub retries: u32,
+}
+
+/// A slave board of source 001: its ring, the cumulative-counter protocol, and the stand-alone
+/// fallback.
+///
+/// * [`on_frame`](Self::on_frame) takes a frame from the link (a refill, or a keep-alive);
+/// * [`step`](Self::step) hands the machine its next item — from the ring, or, when the master
+///   has been silent longer than the limit, from a local pattern the caller supplies;
+/// * [`poll_report`](Self::poll_report) says when to send a request: at once whenever the ring
+///   has a free slot and something was consumed since the last report (the source's
+///   "RP ≠ SP"), again with the retry flag after `retry_after` steps without a refill, and
+///   every `retry_after` steps while stand-alone, so the master can answer.
+///
+/// **Stand-alone and back.** At a row boundary, a linked slave whose master is silent and whose
+/// ring cannot cover the next row switches to its local pattern (`min(row_len, N)` items cover a
+/// row: with a ring shorter than a row, a full ring). A stand-alone slave switches back at a row
+/// boundary once the master is heard again and the ring covers the next row. The master's
+/// stream pauses meanwhile, so the rows around a fault are whole rows of one source or the
+/// other, never a mixture. The one exception: if the ring runs dry mid-row after the master has
+/// gone silent, the rest of that row comes from the local pattern ([`Source::Fallback`]) — there
+/// is nothing else to give the machine.
+///
+/// ```
+/// use regler_ring_transfer::{link, Mode, Refill, Slave, SlaveConfig};
+///
+/// let config = SlaveConfig { address: 3, row_len: 4, silence_limit: 6, retry_after: 4 };
+/// let mut slave: Slave<8> = Slave::new(config)?;
+/// let rom = |_row: u32, col: u16| 0xF0 | (col as u8); // the local pattern
+///
+/// // The master fills the ring.
+/// let mut frame = [0; link::MAX_FRAME];
+/// let n = Refill { slave: 3, first: 0, items: &[1, 2, 3, 4, 5, 6, 7, 8] }.encode(&mut frame)?;
+/// assert_eq!(slave.on_frame(&frame[..n]), Ok(8));
+/// assert_eq!(slave.step(rom).item, 1);
+/// let report = slave.poll_report().unwrap(); // one consumed: ask for one more
+/// assert_eq!((report.consumed, report.received), (1, 8));
+///
+/// // The master falls silent; the ring covers two whole rows, then the slave runs stand-alone.
+/// let items: Vec<u8> = (0..12).map(|_| slave.step(rom).item).collect();
+/// assert_eq!(items, [2, 3, 4, 5, 6, 7, 8, 0xF0, 0xF1, 0xF2, 0xF3, 0xF0]);
+/// assert_eq!(slave.mode(), Mode::StandAlone);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Slave<const N: usize> {
+    config: SlaveConfig,
+    ring: Ring<u8, N>,
+    consumed: u16,
+    received: u16,
+    mode: Mode,
+    row: u32,
+    col: u16,
+    silent: u32,
+    since_report: u32,
+    reported: Option<u16>,
+    gap: bool,
+    stats: SlaveStats,
+}
+
+impl<const N: usize> Slave<N> {
+    /// A slave with an empty ring, linked, waiting for the master's first fill.
+    ///
+    /// # Errors
+    /// The [`SlaveConfigError`] naming the bad field.
+    pub const fn new(config: SlaveConfig) -> Result<Self, SlaveConfigError> {
+        if config.row_len == 0 {
+            return Err(SlaveConfigError::ZeroRow);
+        }
+        if config.silence_limit == 0 {
+            return Err(SlaveConfigError::ZeroSilenceLimit);
+        }
+        if config.retry_after == 0 {
+            return Err(SlaveConfigError::ZeroRetry);
+        }
+        if N == 0 || N > 0x7FFF {
+            return Err(SlaveConfigError::Capacity(N));
+        }
+        Ok(Self {
+            config,
+            ring: Ring::new(),
+            consumed: 0,
+            received: 0,
+            mode: Mode::Linked,
+            row: 0,
+            col: 0,
+            silent: 0,
+            since_report: 0,
+            reported: None,
+            gap: false,
+            stats: SlaveStats {
+                underruns: 0,
+                fallbacks: 0,
+                #[allow(clippy::cast_possible_truncation, reason = "N <= 0x7FFF was checked")]
+                least_slack: N as u16,
+                standalone_rows: 0,
+                standalone_entries: 0,
+                duplicates: 0,
+                gaps: 0,
+                overflows: 0,
+                bad_frames: 0,
+                retries: 0,
+            },
+        })
+    }
+
+    /// Takes one frame from the link; returns how many items went into the ring. Any valid
+    /// frame for this slave — a keep-alive too — tells it the master is there.
+    ///
+    /// Items are taken only in stream order: one whose index is behind the next expected is a
+    /// duplicate and dropped; one beyond it means something was lost — it and the rest of the
+    /// frame are dropped and the next report asks for a resend.
+    ///
+    /// # Errors
+    /// [`FrameError`] for a damaged frame, a refill for another slave, or a report. Nothing is
+    /// changed but the count of bad frames.
+    pub fn on_frame(&mut self, bytes: &[u8]) -> Result<usize, FrameError> {
+        let refill = match decode(bytes) {
+            Ok(Message::Refill(refill)) => refill,
+            Ok(Message::Report(_)) => return Err(FrameError::NotARefill),
+            Err(e) => {
+                self.stats.bad_frames = self.stats.bad_frames.saturating_add(1);
+                return Err(FrameError::Decode(e));
+            }
+        };
+        if refill.slave != self.config.address {
+            return Err(FrameError::NotForMe(refill.slave));
+        }
+        self.silent = 0;
+        let mut taken = 0usize;
+        let mut index = refill.first;
+        for &item in refill.items {
+            let ahead = index.wrapping_sub(self.received);
+            if ahead == 0 {
+                if self.ring.receive(item).is_err() {
+                    self.stats.overflows = self.stats.overflows.saturating_add(1);
+                    break;
+                }
+                self.received = self.received.wrapping_add(1);
+                taken = taken.saturating_add(1);
+            } else if ahead >= 0x8000 {
+                self.stats.duplicates = self.stats.duplicates.saturating_add(1);
+            } else {
+                self.stats.gaps = self.stats.gaps.saturating_add(1);
+                self.gap = true;
+                break;
+            }
+            index = index.wrapping_add(1);
+        }
+        if taken > 0 {
+            self.since_report = 0;
+        }
+        Ok(taken)
+    }
+
+    fn master_silent(&self) -> bool {
+        self.silent > self.config.silence_limit
+    }
+
+    fn ring_covers_a_row(&self) -> bool {
+        self.ring.len() >= usize::from(self.config.row_len).min(N)
+    }
+
+    /// The machine's next item. `local(row, col)` is the local pattern, asked only when the
+    /// item does not come from the master.
+    pub fn step(&mut self, local: impl FnOnce(u32, u16) -> u8) -> Output {
+        if self.col == 0 {
+            match self.mode {
+                Mode::Linked if self.master_silent() && !self.ring_covers_a_row() => {
+                    self.mode = Mode::StandAlone;
+                    self.stats.standalone_entries = self.stats.standalone_entries.saturating_add(1);
+                }
+                Mode::StandAlone if !self.master_silent() && self.ring_covers_a_row() => {
+                    self.mode = Mode::Linked;
+                }
+                _ => {}
+            }
+        }
+        let (row, col) = (self.row, self.col);
+        let (item, source) = match self.mode {
+            Mode::StandAlone => (local(row, col), Source::Local),
+            Mode::Linked => {
+                if let Some(item) = self.ring.next() {
+                    self.consumed = self.consumed.wrapping_add(1);
+                    let slack = u16::try_from(self.ring.len()).unwrap_or(u16::MAX);
+                    self.stats.least_slack = self.stats.least_slack.min(slack);
+                    (item, Source::Master)
+                } else {
+                    // Nothing to give: skip the master's item (taken as received and consumed,
+                    // so it is dropped as a duplicate when it comes) and keep the row aligned.
+                    self.consumed = self.consumed.wrapping_add(1);
+                    self.received = self.received.wrapping_add(1);
+                    let source = if self.master_silent() {
+                        self.stats.fallbacks = self.stats.fallbacks.saturating_add(1);
+                        Source::Fallback
+                    } else {
+                        self.stats.underruns = self.stats.underruns.saturating_add(1);
+                        self.stats.least_slack = 0;
+                        Source::Underrun
+                    };
+                    (local(row, col), source)
+                }
+            }
+        };
+        self.col = self.col.saturating_add(1);
+        if self.col >= self.config.row_len {
+            self.col = 0;
+            self.row = self.row.wrapping_add(1);
+            if self.mode == Mode::StandAlone {
+                self.stats.standalone_rows = self.stats.standalone_rows.saturating_add(1);
+            }
+        }
+        self.silent = self.silent.saturating_add(1);
+        self.since_report = self.since_report.saturating_add(1);
+        Output {
+            item,
+            source,
+            row,
+            col,
+        }
+    }
+
+    /// A report to send now, if one is due (see the type's docs).
+    pub fn poll_report(&mut self) -> Option<Report> {
+        let owed = self.ring.requests() > 0;
+        let fresh = self.reported != Some(self.consumed);
+        let waited = self.since_report >= self.config.retry_after;
+        let standalone = self.mode == Mode::StandAlone;
+        let retry = self.gap || (owed && waited && !fresh);
+        if !(retry || (owed && fresh) || (standalone && waited)) {
+            return None;
+        }
+        if retry {
+            self.stats.retries = self.stats.retries.saturating_add(1);
+        }
+        self.gap = false;
+        self.reported = Some(self.consumed);
+        self.since_report = 0;
+        Some(self.report(retry))
+    }
+
+    /// The report this slave would send now (for a status request, the source's keys 1–8).
+    #[must_use]
+    pub fn report(&self, retry: bool) -> Report {
+        Report {
+            slave: self.config.address,
+            consumed: self.consumed,
+            received: self.received,
+            standalone: self.mode == Mode::StandAlone,
+            retry,
+        }
+    }
+
+    /// Linked or stand-alone.
+    #[must_use]
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// The row being made and the position in it.
+    #[must_use]
+    pub fn position(&self) -> (u32, u16) {
+        (self.row, self.col)
+    }
+
+    /// Items in the ring.
+    #[must_use]
+    pub fn slack(&self) -> usize {
+        self.ring.len()
+    }
+
+    /// Refills owed (free slots).
+    #[must_use]
+    pub fn requests(&self) -> usize {
+        self.ring.requests()
+    }
+
+    /// Statistics.
+    #[must_use]
+    pub fn stats(&self) -> SlaveStats {
+        self.stats
+    }
+
+    /// The configuration.
+    #[must_use]
+    pub fn config(&self) -> SlaveConfig {
+        self.config
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::{MAX_FRAME, Refill};
+
+    const CONFIG: SlaveConfig = SlaveConfig {
+        address: 1,
+        row_len: 4,
+        silence_limit: 6,
+        retry_after: 3,
+    };
+
+    fn refill(slave: &mut Slave<8>, first: u16, items: &[u8]) -> Result<usize, FrameError> {
+        let mut buf = [0; MAX_FRAME];
+        let n = Refill {
+            slave: 1,
+            first,
+            items,
+        }
+        .encode(&mut buf)
+        .unwrap();
+        slave.on_frame(&buf[..n])
+    }
+
+    #[test]
+    fn config_is_checked() {
+        assert_eq!(
+            Slave::<8>::new(SlaveConfig {
+                row_len: 0,
+                ..CONFIG
+            })
+            .err(),
+            Some(SlaveConfigError::ZeroRow)
+        );
+        assert_eq!(
+            Slave::<8>::new(SlaveConfig {
+                silence_limit: 0,
+                ..CONFIG
+            })
+            .err(),
+            Some(SlaveConfigError::ZeroSilenceLimit)
+        );
+        assert_eq!(
+            Slave::<8>::new(SlaveConfig {
+                retry_after: 0,
+                ..CONFIG
+            })
+            .err(),
+            Some(SlaveConfigError::ZeroRetry)
+        );
+        assert_eq!(
+            Slave::<40_000>::new(CONFIG).err(),
+            Some(SlaveConfigError::Capacity(40_000))
+        );
+    }
+
+    #[test]
+    fn duplicates_and_gaps() {
+        let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
+        assert_eq!(refill(&mut s, 0, &[0, 1, 2]), Ok(3));
+        assert_eq!(refill(&mut s, 1, &[1, 2, 3]), Ok(1)); // 1, 2 again; 3 new
+        assert_eq!(refill(&mut s, 6, &[6]), Ok(0)); // 4, 5 lost
+        assert_eq!(s.stats().duplicates, 2);
+        assert_eq!(s.stats().gaps, 1);
+        let r = s.poll_report().unwrap();
+        assert!(r.retry);
+        assert_eq!(r.received, 4);
+        assert_eq!(refill(&mut s, 4, &[4, 5, 6, 7, 8, 9]), Ok(4)); // the ring holds 8
+        assert_eq!(s.stats().overflows, 1);
+        let items: Vec<u8> = (0..8).map(|_| s.step(|_, _| 0xEE).item).collect();
+        assert_eq!(items, [0, 1, 2, 3, 4, 5, 6, 7]);
+    }
+
+    #[test]
+    fn an_underrun_skips_the_late_item() {
+        let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
+        refill(&mut s, 0, &[10]).unwrap();
+        assert_eq!(s.step(|_, _| 0xEE).source, Source::Master);
+        let out = s.step(|_, _| 0xEE);
+        assert_eq!((out.item, out.source), (0xEE, Source::Underrun));
+        // Item 1 comes late: dropped; item 2 is used.
+        assert_eq!(refill(&mut s, 1, &[11, 12]), Ok(1));
+        assert_eq!(s.step(|_, _| 0xEE).item, 12);
+        assert_eq!(s.stats().underruns, 1);
+    }
+
+    #[test]
+    fn other_frames_are_refused_without_effect() {
+        let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
+        let mut buf = [0; MAX_FRAME];
+        let n = Refill {
+            slave: 2,
+            first: 0,
+            items: &[1],
+        }
+        .encode(&mut buf)
+        .unwrap();
+        assert_eq!(s.on_frame(&buf[..n]), Err(FrameError::NotForMe(2)));
+        let n = s.report(false).encode(&mut buf).unwrap();
+        assert_eq!(s.on_frame(&buf[..n]), Err(FrameError::NotARefill));
+        assert!(matches!(s.on_frame(&[0x5A, 1]), Err(FrameError::Decode(_))));
+        assert_eq!(s.slack(), 0);
+        assert_eq!(s.stats().bad_frames, 1);
+    }
+
+    #[test]
+    fn stand_alone_reports_and_comes_back_at_a_row_boundary() {
+        let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
+        refill(&mut s, 0, &[0, 1, 2, 3, 4, 5, 6, 7]).unwrap();
+        let mut sources = Vec::new();
+        for _ in 0..20 {
+            sources.push(s.step(|_, _| 0xEE).source);
+            let _ = s.poll_report();
+        }
+        assert_eq!(s.mode(), Mode::StandAlone);
+        assert!(sources[..8].iter().all(|&x| x == Source::Master));
+        assert!(sources[8..].iter().all(|&x| x == Source::Local));
+        // The stand-alone slave keeps reporting so that a returning master can answer.
+        let mut hail = None;
+        for _ in 0..3 {
+            s.step(|_, _| 0);
+            hail = hail.or(s.poll_report());
+        }
+        assert!(hail.unwrap().standalone);
+        // The master is back mid-row: the rest of the row stays local.
+        let (_, col) = s.position();
+        assert_ne!(col, 0);
+        refill(&mut s, 8, &[8, 9, 10, 11, 12, 13, 14, 15]).unwrap();
+        while s.position().1 != 0 {
+            assert_eq!(s.step(|_, _| 0xEE).source, Source::Local);
+        }
+        let next: Vec<u8> = (0..4).map(|_| s.step(|_, _| 0xEE).item).collect();
+        assert_eq!(next, [8, 9, 10, 11]);
+        assert_eq!(s.mode(), Mode::Linked);
+    }
+}
