@@ -1,0 +1,544 @@
+//! Properties of the ring, its split halves, the lossy-link protocol, the master and the
+//! capacity check — each against a simple model, never against a copy of the implementation.
+#![allow(
+    clippy::unwrap_used,
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::cast_possible_truncation,
+    reason = "a test may panic: that is how it fails"
+)]
+
+use std::collections::VecDeque;
+
+use proptest::prelude::*;
+use regler_ring_transfer::capacity::{self, LinkSpec, Load, Verdict};
+use regler_ring_transfer::{
+    Master, Mode, Refill, Report, ReportOutcome, Ring, SharedRing, Slave, SlaveConfig, SlaveParams,
+    Source, link,
+};
+
+#[derive(Debug, Clone, Copy)]
+enum Op {
+    Receive(u8),
+    Next,
+}
+
+fn ops() -> impl Strategy<Value = Vec<Op>> {
+    proptest::collection::vec(
+        prop_oneof![any::<u8>().prop_map(Op::Receive), Just(Op::Next)],
+        0..300,
+    )
+}
+
+proptest! {
+    /// The ring behaves as a bounded `VecDeque`, and its statistics are what the model saw.
+    #[test]
+    fn ring_is_a_bounded_fifo(ops in ops()) {
+        let mut ring: Ring<u8, 8> = Ring::new();
+        let mut model: VecDeque<u8> = VecDeque::new();
+        let (mut underruns, mut least, mut received, mut consumed) = (0u32, 8usize, 0u32, 0u32);
+        for op in ops {
+            match op {
+                Op::Receive(x) => {
+                    let expected = if model.len() < 8 { model.push_back(x); received += 1; Ok(()) } else { Err(x) };
+                    prop_assert_eq!(ring.receive(x), expected);
+                }
+                Op::Next => {
+                    let expected = model.pop_front();
+                    match expected {
+                        Some(_) => { consumed += 1; least = least.min(model.len()); }
+                        None => { underruns += 1; least = 0; }
+                    }
+                    prop_assert_eq!(ring.next(), expected);
+                }
+            }
+            prop_assert_eq!(ring.slack(), model.len());
+            prop_assert_eq!(ring.requests(), 8 - model.len());
+            prop_assert_eq!(ring.deadline(7), 7 * model.len() as u64);
+        }
+        let stats = ring.stats();
+        prop_assert_eq!((stats.underruns, stats.least_slack, stats.most_requests), (underruns, least, 8 - least));
+        prop_assert_eq!((ring.counters().received, ring.counters().consumed), (received, consumed));
+    }
+
+    /// The split halves, used in any order one operation at a time, are the same bounded FIFO.
+    #[test]
+    fn split_halves_are_a_bounded_fifo(ops in ops()) {
+        let mut shared: SharedRing<u8, 9> = SharedRing::new();
+        let (mut filler, mut drainer) = shared.split();
+        let mut model: VecDeque<u8> = VecDeque::new();
+        for op in ops {
+            match op {
+                Op::Receive(x) => {
+                    let expected = if model.len() < 8 { model.push_back(x); Ok(()) } else { Err(x) };
+                    prop_assert_eq!(filler.receive(x), expected);
+                }
+                Op::Next => prop_assert_eq!(drainer.next(), model.pop_front()),
+            }
+            prop_assert_eq!(filler.requests(), 8 - model.len());
+            let c = filler.counters();
+            prop_assert_eq!(c.received.wrapping_sub(c.consumed) as usize, model.len());
+            prop_assert_eq!(c.consumed, drainer.consumed());
+        }
+    }
+}
+
+/// Every interleaving of a filler's and a drainer's operation sequences (6 + 6 operations,
+/// 924 interleavings per pair of sequences) keeps the order and loses nothing.
+#[test]
+fn every_interleaving_of_the_halves_keeps_order() {
+    let mut checked = 0;
+    for mask in 0u32..(1 << 12) {
+        if mask.count_ones() != 6 {
+            continue;
+        }
+        let mut shared: SharedRing<u8, 4> = SharedRing::new();
+        let (mut filler, mut drainer) = shared.split();
+        let (mut next_in, mut next_out, mut pending) = (0u8, 0u8, None);
+        for step in 0..12 {
+            if mask & (1 << step) != 0 {
+                let item = pending.take().unwrap_or_else(|| {
+                    next_in += 1;
+                    next_in - 1
+                });
+                if let Err(back) = filler.receive(item) {
+                    pending = Some(back);
+                }
+            } else if let Some(item) = drainer.next() {
+                assert_eq!(item, next_out, "mask {mask:#b}");
+                next_out += 1;
+            }
+        }
+        while let Some(item) = drainer.next() {
+            assert_eq!(item, next_out);
+            next_out += 1;
+        }
+        assert_eq!(
+            next_out + u8::from(pending.is_some()),
+            next_in,
+            "mask {mask:#b}"
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 924);
+}
+
+/// Two real threads, a small ring, a million items: nothing lost, repeated or reordered.
+#[test]
+fn threads_move_a_million_items_in_order() {
+    let mut shared: SharedRing<u32, 5> = SharedRing::new();
+    let (mut filler, mut drainer) = shared.split();
+    const COUNT: u32 = 1_000_000;
+    std::thread::scope(|s| {
+        s.spawn(move || {
+            for i in 0..COUNT {
+                let mut item = i;
+                while let Err(back) = filler.receive(item) {
+                    item = back;
+                    std::thread::yield_now();
+                }
+            }
+        });
+        let mut expect = 0;
+        while expect < COUNT {
+            match drainer.next() {
+                Some(item) => {
+                    assert_eq!(item, expect);
+                    expect += 1;
+                }
+                None => std::thread::yield_now(),
+            }
+        }
+    });
+}
+
+/// A link that loses, repeats and delays frames (a delayed frame overtakes later ones).
+#[derive(Debug, Clone)]
+struct Faults {
+    loss: u8,
+    duplicate: u8,
+    delay: u8,
+}
+
+struct LossyLink {
+    in_flight: Vec<(u64, Vec<u8>)>,
+    rng: u64,
+    faults: Faults,
+}
+
+impl LossyLink {
+    fn new(seed: u64, faults: Faults) -> Self {
+        Self {
+            in_flight: Vec::new(),
+            rng: seed | 1,
+            faults,
+        }
+    }
+    fn roll(&mut self) -> u8 {
+        // xorshift64*
+        self.rng ^= self.rng >> 12;
+        self.rng ^= self.rng << 25;
+        self.rng ^= self.rng >> 27;
+        (self.rng.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 56) as u8
+    }
+    fn send(&mut self, now: u64, frame: &[u8], perfect: bool) {
+        if perfect {
+            self.in_flight.push((now + 1, frame.to_vec()));
+            return;
+        }
+        if self.roll() < self.faults.loss {
+            return;
+        }
+        let copies = if self.roll() < self.faults.duplicate {
+            2
+        } else {
+            1
+        };
+        for _ in 0..copies {
+            let delay = if self.roll() < self.faults.delay {
+                1 + u64::from(self.roll() % 40)
+            } else {
+                1
+            };
+            self.in_flight.push((now + delay, frame.to_vec()));
+        }
+    }
+    fn arrived(&mut self, now: u64) -> Vec<Vec<u8>> {
+        let (due, later): (Vec<_>, Vec<_>) = self.in_flight.drain(..).partition(|(t, _)| *t <= now);
+        self.in_flight = later;
+        due.into_iter().map(|(_, f)| f).collect()
+    }
+}
+
+fn faults() -> impl Strategy<Value = Faults> {
+    (0u8..100, 0u8..100, 0u8..100).prop_map(|(loss, duplicate, delay)| Faults {
+        loss,
+        duplicate,
+        delay,
+    })
+}
+
+/// One master, one slave, both directions faulty for a while, then a clean link. Returns the
+/// machine's output.
+fn run_lossy(
+    seed: u64,
+    faults: Faults,
+    faulty_until: u64,
+    total: u64,
+) -> (Vec<(u64, u8, Source)>, Master<1>, Slave<32>) {
+    let config = SlaveConfig {
+        address: 0,
+        row_len: 10,
+        silence_limit: 1_000_000,
+        retry_after: 6,
+    };
+    let mut slave: Slave<32> = Slave::new(config).unwrap();
+    let mut master: Master<1> = Master::new();
+    master
+        .attach(
+            0,
+            SlaveParams {
+                capacity: 32,
+                t0: 1,
+            },
+        )
+        .unwrap();
+    let mut up = LossyLink::new(seed, faults.clone());
+    let mut down = LossyLink::new(seed.rotate_left(17) ^ 0x55, faults);
+    let mut frame = [0u8; link::MAX_FRAME];
+    let mut items = [0u8; link::MAX_REFILL];
+    let mut out = Vec::new();
+    let mut index = 0u64; // stream index of the item the machine takes next (linked mode)
+    for now in 0..total {
+        let perfect = now >= faulty_until;
+        for f in up.arrived(now) {
+            if let Ok(link::Message::Report(r)) = link::decode(&f) {
+                master.on_report(now, 0, &r).unwrap();
+            }
+        }
+        while let Some(g) = master.next_refill(now, 8) {
+            let n = g.count as usize;
+            for (k, item) in items[..n].iter_mut().enumerate() {
+                *item = (g.first + k as u64) as u8;
+            }
+            let len = Refill {
+                slave: 0,
+                first: g.first_wire(),
+                items: &items[..n],
+            }
+            .encode(&mut frame)
+            .unwrap();
+            down.send(now, &frame[..len], perfect);
+        }
+        for f in down.arrived(now) {
+            slave.on_frame(&f).unwrap();
+        }
+        // The machine runs every other tick (the link is faster than the machine).
+        if now % 2 == 0 {
+            let o = slave.step(|_, _| 0xEE);
+            out.push((index, o.item, o.source));
+            index += 1;
+        }
+        if let Some(r) = slave.poll_report() {
+            let len = r.encode(&mut frame).unwrap();
+            up.send(now, &frame[..len], perfect);
+        }
+    }
+    (out, master, slave)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Whatever the link loses, repeats or reorders, every item the machine gets from the
+    /// master is the right item for its position — none lost, repeated or out of order — and
+    /// once the link is clean again the slave is fed on time.
+    #[test]
+    fn no_item_lost_repeated_or_reordered_on_a_lossy_link(seed in any::<u64>(), faults in faults()) {
+        let (out, master, slave) = run_lossy(seed, faults, 2_000, 4_000);
+        for &(index, item, source) in &out {
+            if source == Source::Master {
+                prop_assert_eq!(item, index as u8, "position {}", index);
+            }
+        }
+        // Liveness: the last 500 steps (long after the link recovered) are all from the master.
+        prop_assert!(out[out.len() - 500..].iter().all(|&(_, _, s)| s == Source::Master));
+        prop_assert_eq!(slave.mode(), Mode::Linked);
+        let status = master.status(0).unwrap();
+        prop_assert!(status.owed <= 32);
+    }
+
+    /// The master owes exactly what the newest report says, after any subset of the reports in
+    /// any order, each any number of times.
+    #[test]
+    fn owed_follows_the_newest_report(
+        steps in proptest::collection::vec((0u16..4, 0u16..4), 1..40),
+        picks in proptest::collection::vec(any::<prop::sample::Index>(), 0..80),
+        start in any::<u16>(),
+    ) {
+        const CAP: u16 = 16;
+        // The true history: consumed ≤ received ≤ sent, both counters non-decreasing.
+        let mut master: Master<1> = Master::new();
+        master.attach(0, SlaveParams { capacity: CAP, t0: 3 }).unwrap();
+        let base = Report { slave: 0, consumed: start, received: start, standalone: false, retry: false };
+        master.on_report(0, 0, &base).unwrap();
+        let mut sent = 0u64;
+        let mut history = Vec::new();
+        let (mut c, mut r) = (0u64, 0u64);
+        for (dc, dr) in steps {
+            // The master sends what is owed, the slave takes some and consumes some.
+            while let Some(g) = master.next_refill(0, 1) { sent = g.first + 1 - u64::from(start); }
+            r = (r + u64::from(dr)).min(sent);
+            c = (c + u64::from(dc)).min(r);
+            history.push((c, r));
+        }
+        let at = |i: usize| {
+            let (c, r) = history[i];
+            Report { slave: 0, consumed: start.wrapping_add(c as u16), received: start.wrapping_add(r as u16), standalone: false, retry: false }
+        };
+        let mut newest: Option<usize> = None;
+        for pick in picks {
+            let i = pick.index(history.len());
+            let outcome = master.on_report(10, 0, &at(i)).unwrap();
+            let before = newest.map(|n| history[n]);
+            let newer = match before { None => history[i] != (0, 0), Some(b) => history[i] != b && history[i].0 >= b.0 && history[i].1 >= b.1 };
+            if newer { newest = Some(i); }
+            let (nc, _) = newest.map(|n| history[n]).unwrap_or((0, 0));
+            let expected_owed = (nc + u64::from(CAP)).saturating_sub(sent) as u32;
+            match outcome {
+                ReportOutcome::Accepted { owed } => { prop_assert!(newer); prop_assert_eq!(owed, expected_owed); }
+                ReportOutcome::Stale => prop_assert!(!newer),
+            }
+            prop_assert_eq!(master.status(0).unwrap().owed, expected_owed);
+        }
+    }
+}
+
+/// The capacity check's model, run with the crate's master: slaves consume on their own phases
+/// every `t0`, the link delivers one item per `item_time`, reports reach the master `latency`
+/// later. Each consumption requests one item due `(ring − 1)·t0` later (the source's rule).
+/// Returns (underruns, items delivered after their due time).
+fn simulate(loads: &[Load], link: LinkSpec, phases: &[u64], horizon: u64) -> (u64, u64) {
+    let n = loads.len();
+    let mut master: Master<8> = Master::new();
+    let mut held: Vec<u64> = loads.iter().map(|l| u64::from(l.ring)).collect();
+    let mut consumed = vec![0u64; n];
+    let mut received: Vec<u64> = held.clone();
+    let mut due: Vec<VecDeque<u64>> = vec![VecDeque::new(); n];
+    for (i, l) in loads.iter().enumerate() {
+        master
+            .attach(
+                i,
+                SlaveParams {
+                    capacity: l.ring as u16,
+                    t0: l.t0 as u32,
+                },
+            )
+            .unwrap();
+        let r = Report {
+            slave: i as u8,
+            consumed: 0,
+            received: l.ring as u16,
+            standalone: false,
+            retry: false,
+        };
+        master.on_report(0, i, &r).unwrap();
+    }
+    let mut reports: VecDeque<(u64, usize, Report)> = VecDeque::new();
+    let mut busy: Option<(u64, usize)> = None;
+    let (mut underruns, mut misses) = (0, 0);
+    for now in 0..horizon {
+        if let Some((done, slave)) = busy {
+            if done == now {
+                held[slave] += 1;
+                received[slave] += 1;
+                if due[slave].pop_front().is_some_and(|d| now > d) {
+                    misses += 1;
+                }
+                busy = None;
+            }
+        }
+        for i in 0..n {
+            if now >= phases[i] && (now - phases[i]) % loads[i].t0 == 0 {
+                if held[i] == 0 {
+                    underruns += 1;
+                } else {
+                    held[i] -= 1;
+                }
+                consumed[i] += 1;
+                due[i].push_back(now + u64::from(loads[i].ring - 1) * loads[i].t0);
+                let r = Report {
+                    slave: i as u8,
+                    consumed: consumed[i] as u16,
+                    received: received[i] as u16,
+                    standalone: false,
+                    retry: false,
+                };
+                reports.push_back((now + link.latency, i, r));
+            }
+        }
+        while reports.front().is_some_and(|&(t, _, _)| t <= now) {
+            let (_, i, r) = reports.pop_front().unwrap();
+            master.on_report(now, i, &r).unwrap();
+        }
+        if busy.is_none() {
+            if let Some(g) = master.next_refill(now, 1) {
+                busy = Some((now + link.item_time, g.slave));
+            }
+        }
+    }
+    (underruns, misses)
+}
+
+fn slave_sets() -> impl Strategy<Value = (Vec<Load>, LinkSpec, Vec<u64>)> {
+    (1usize..6, 1u64..24, 0u64..12).prop_flat_map(|(n, item_time, latency)| {
+        (
+            proptest::collection::vec(
+                (20u64..120, 2u32..14).prop_map(|(t0, ring)| Load { t0, ring }),
+                n,
+            ),
+            Just(LinkSpec { item_time, latency }),
+            proptest::collection::vec(0u64..200, n),
+        )
+    })
+}
+
+/// Slave 0 with a short deadline (ring 2 or 3, t0 20–80) and an item time between a third of its
+/// t0 and all of it; the others slower, with longer rings.
+fn blocking_sets() -> impl Strategy<Value = (Vec<Load>, LinkSpec)> {
+    (20u64..80, 2u32..4, 1usize..4).prop_flat_map(|(t0, ring, others)| {
+        (
+            Just(Load { t0, ring }),
+            proptest::collection::vec((1u64..6, 2u32..8), others),
+            (t0 / 3)..t0,
+        )
+            .prop_map(move |(first, others, item_time)| {
+                let mut loads = vec![first];
+                loads.extend(others.into_iter().map(|(k, ring)| Load {
+                    t0: t0 * (1 + k),
+                    ring,
+                }));
+                (
+                    loads,
+                    LinkSpec {
+                        item_time: item_time.max(1),
+                        latency: 0,
+                    },
+                )
+            })
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// Whenever the check says schedulable, the master keeps every slave fed and never grants
+    /// late, whatever the machines' phases, over a long run.
+    #[test]
+    fn schedulable_means_no_underrun((loads, link, phases) in slave_sets()) {
+        if capacity::check(&loads, link).unwrap().is_schedulable() {
+            let (underruns, misses) = simulate(&loads, link, &phases, 40_000);
+            prop_assert_eq!(underruns, 0);
+            prop_assert_eq!(misses, 0);
+        }
+    }
+
+    /// At the boundary the test is about: a slave with a short deadline beside slaves whose
+    /// items can hold the link. Accepted → no phasing makes an item late; refused for a
+    /// deadline → the worst case the test describes (one machine a tick ahead, so that its item
+    /// holds the link when the others ask, or all in step) does make one late.
+    #[test]
+    fn the_blocking_boundary_is_tight((loads, link) in blocking_sets()) {
+        let n = loads.len();
+        let mut phasings = vec![vec![1; n]];
+        for ahead in 0..n {
+            let mut p = vec![1; n];
+            p[ahead] = 0;
+            phasings.push(p);
+        }
+        match capacity::check(&loads, link).unwrap() {
+            Verdict::Schedulable { .. } => {
+                for p in &phasings {
+                    prop_assert_eq!(simulate(&loads, link, p, 10_000), (0, 0), "{:?} {:?} {:?}", loads, link, p);
+                }
+            }
+            Verdict::DeadlineMiss { .. } => {
+                let missed = phasings.iter().any(|p| simulate(&loads, link, p, 10_000).1 > 0);
+                prop_assert!(missed, "{:?} {:?}", loads, link);
+            }
+            _ => {}
+        }
+    }
+
+    /// A set just past the link's capacity (utilisation 1.02–1.2) does underrun.
+    #[test]
+    fn just_past_the_bound_underruns(n in 2usize..6, ring in 2u32..14, extra in 2u64..20) {
+        // n identical slaves with t0 chosen so that n·item_time/t0 = 1 + extra/100.
+        let item_time = 100 + extra;
+        let t0 = n as u64 * 100;
+        let loads = vec![Load { t0, ring }; n];
+        let link = LinkSpec { item_time, latency: 0 };
+        prop_assert!(!capacity::check(&loads, link).unwrap().is_schedulable());
+        // The backlog grows by extra/100 items per t0; give it time to empty every ring.
+        let horizon = t0 * (u64::from(ring) + 2) * 100 / extra * 2;
+        let (underruns, _) = simulate(&loads, link, &vec![0; n], horizon);
+        prop_assert!(underruns > 0);
+    }
+}
+
+/// The check's verdicts on the source's numbers.
+#[test]
+fn the_sources_numbers() {
+    // 130 rpm, 200 needles, one byte per needle: t0 ≈ 2.308 ms; 2 ms to serve all requests.
+    let machine = Load {
+        t0: 2_308,
+        ring: 256,
+    };
+    let link = LinkSpec {
+        item_time: 28,
+        latency: 100,
+    };
+    assert!(capacity::max_slaves(machine, link, 500).unwrap() >= 80);
+    let report = capacity::check(&[machine; 100], link).unwrap();
+    assert!(!report.is_schedulable());
+}
