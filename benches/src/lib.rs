@@ -5,4 +5,5 @@ pub mod count_down;
 pub mod dock;
 pub mod naive_decode;
 pub mod pid_loop;
+pub mod ring_pairs;
 pub mod scan;

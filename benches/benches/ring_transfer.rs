@@ -1,0 +1,162 @@
+//! The ring beside its anchors, in one run: a `receive` + `next` pair on a half-full 256-slot
+//! byte ring — the crate's `Ring` (statistics on) and split halves, `heapless::spsc::Queue` used
+//! directly and through its own halves, a plain array ring; two threads moving 10 million items
+//! through the split halves and through heapless's; and the master's scheduling decision with 8,
+//! 80 and 500 slaves.
+
+use std::hint::black_box;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use heapless::spsc::Queue;
+use regler_benches::ring_pairs::{ArrayRing, SLOTS};
+use regler_ring_transfer::{Master, Report, Ring, SharedRing, SlaveParams};
+
+macro_rules! pair_bench {
+    ($group:expr, $name:expr, |$v:ident| $push:expr, $pop:expr) => {{
+        for _ in 0..SLOTS / 2 {
+            let $v = 0u8;
+            let _ = $push;
+        }
+        let mut x = 0u8;
+        $group.bench_function($name, |b| {
+            b.iter(|| {
+                x = x.wrapping_add(1);
+                let $v = black_box(x);
+                let _ = $push;
+                black_box($pop)
+            })
+        });
+    }};
+}
+
+fn pairs(c: &mut Criterion) {
+    let mut group = c.benchmark_group("ring/pair");
+    group.throughput(Throughput::Elements(1));
+    let mut ring: Box<Ring<u8, SLOTS>> = Box::default();
+    pair_bench!(group, "regler Ring", |v| ring.receive(v), ring.next());
+    let mut queue: Box<Queue<u8, { SLOTS + 1 }>> = Box::default();
+    pair_bench!(group, "heapless spsc Queue", |v| queue.enqueue(v), queue.dequeue());
+    let mut shared: Box<SharedRing<u8, { SLOTS + 1 }>> = Box::default();
+    let (mut filler, mut drainer) = shared.split();
+    pair_bench!(group, "regler Filler+Drainer", |v| filler.receive(v), drainer.next());
+    let mut queue: Box<Queue<u8, { SLOTS + 1 }>> = Box::default();
+    let (mut producer, mut consumer) = queue.split();
+    pair_bench!(group, "heapless Producer+Consumer", |v| producer.enqueue(v), consumer.dequeue());
+    let mut array = Box::<ArrayRing>::default();
+    pair_bench!(group, "plain array ring", |v| array.push(v), array.pop());
+    group.finish();
+}
+
+const TRANSFER: u32 = 10_000_000;
+
+fn two_threads(c: &mut Criterion) {
+    let mut group = c.benchmark_group("ring/two-thread transfer");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(u64::from(TRANSFER)));
+    group.bench_function("regler Filler+Drainer", |b| {
+        b.iter(|| {
+            let mut shared: Box<SharedRing<u32, { SLOTS + 1 }>> = Box::default();
+            let (mut filler, mut drainer) = shared.split();
+            std::thread::scope(|s| {
+                s.spawn(move || {
+                    for i in 0..TRANSFER {
+                        let mut item = i;
+                        while let Err(back) = filler.receive(item) {
+                            item = back;
+                            std::hint::spin_loop();
+                        }
+                    }
+                });
+                let mut sum = 0u64;
+                let mut got = 0;
+                while got < TRANSFER {
+                    if let Some(item) = drainer.next() {
+                        sum = sum.wrapping_add(u64::from(item));
+                        got += 1;
+                    }
+                }
+                black_box(sum)
+            })
+        })
+    });
+    group.bench_function("heapless Producer+Consumer", |b| {
+        b.iter(|| {
+            let mut queue: Box<Queue<u32, { SLOTS + 1 }>> = Box::default();
+            let (mut producer, mut consumer) = queue.split();
+            std::thread::scope(|s| {
+                s.spawn(move || {
+                    for i in 0..TRANSFER {
+                        let mut item = i;
+                        while let Err(back) = producer.enqueue(item) {
+                            item = back;
+                            std::hint::spin_loop();
+                        }
+                    }
+                });
+                let mut sum = 0u64;
+                let mut got = 0;
+                while got < TRANSFER {
+                    if let Some(item) = consumer.dequeue() {
+                        sum = sum.wrapping_add(u64::from(item));
+                        got += 1;
+                    }
+                }
+                black_box(sum)
+            })
+        })
+    });
+    group.finish();
+}
+
+/// A master with `n` slaves of mixed rates and rings in steady state: each iteration is one
+/// decision (`next_refill`) and the served slave's next report (one heap update each).
+fn scheduler(c: &mut Criterion) {
+    let mut group = c.benchmark_group("ring/scheduler decision");
+    for n in [8usize, 80, 500] {
+        let mut master: Box<Master<512>> = Box::default();
+        let mut consumed = vec![0u16; n];
+        for i in 0..n {
+            let t0 = 2_000 + (i as u32 * 37) % 400;
+            let capacity = 64 + (i as u16 * 13) % 192;
+            master.attach(i, SlaveParams { capacity, t0 }).expect("slave");
+            let hello = Report { slave: 0, consumed: 0, received: 0, standalone: false, retry: false };
+            master.on_report(0, i, &hello).expect("report");
+        }
+        // Serve everything owed, then run in steady state.
+        while master.next_refill(0, 64).is_some() {}
+        let mut now = 0u64;
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| {
+                now += 1;
+                if let Some(grant) = master.next_refill(now, 1) {
+                    let s = grant.slave;
+                    consumed[s] = consumed[s].wrapping_add(1);
+                    let r = Report {
+                        slave: 0,
+                        consumed: consumed[s],
+                        received: consumed[s].wrapping_add(64),
+                        standalone: false,
+                        retry: false,
+                    };
+                    black_box(master.on_report(now, s, &r).ok());
+                } else {
+                    // Nothing owed: every slave reports one more consumption.
+                    let s = (now as usize) % n;
+                    consumed[s] = consumed[s].wrapping_add(1);
+                    let r = Report {
+                        slave: 0,
+                        consumed: consumed[s],
+                        received: consumed[s].wrapping_add(64),
+                        standalone: false,
+                        retry: false,
+                    };
+                    black_box(master.on_report(now, s, &r).ok());
+                }
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, pairs, two_threads, scheduler);
+criterion_main!(benches);
