@@ -35,13 +35,28 @@ fn pairs(c: &mut Criterion) {
     let mut ring: Box<Ring<u8, SLOTS>> = Box::default();
     pair_bench!(group, "regler Ring", |v| ring.receive(v), ring.next());
     let mut queue: Box<Queue<u8, { SLOTS + 1 }>> = Box::default();
-    pair_bench!(group, "heapless spsc Queue", |v| queue.enqueue(v), queue.dequeue());
+    pair_bench!(
+        group,
+        "heapless spsc Queue",
+        |v| queue.enqueue(v),
+        queue.dequeue()
+    );
     let mut shared: Box<SharedRing<u8, { SLOTS + 1 }>> = Box::default();
     let (mut filler, mut drainer) = shared.split();
-    pair_bench!(group, "regler Filler+Drainer", |v| filler.receive(v), drainer.next());
+    pair_bench!(
+        group,
+        "regler Filler+Drainer",
+        |v| filler.receive(v),
+        drainer.next()
+    );
     let mut queue: Box<Queue<u8, { SLOTS + 1 }>> = Box::default();
     let (mut producer, mut consumer) = queue.split();
-    pair_bench!(group, "heapless Producer+Consumer", |v| producer.enqueue(v), consumer.dequeue());
+    pair_bench!(
+        group,
+        "heapless Producer+Consumer",
+        |v| producer.enqueue(v),
+        consumer.dequeue()
+    );
     let mut array = Box::<ArrayRing>::default();
     pair_bench!(group, "plain array ring", |v| array.push(v), array.pop());
     group.finish();
@@ -118,8 +133,16 @@ fn scheduler(c: &mut Criterion) {
         for i in 0..n {
             let t0 = 2_000 + (i as u32 * 37) % 400;
             let capacity = 64 + (i as u16 * 13) % 192;
-            master.attach(i, SlaveParams { capacity, t0 }).expect("slave");
-            let hello = Report { slave: 0, consumed: 0, received: 0, standalone: false, retry: false };
+            master
+                .attach(i, SlaveParams { capacity, t0 })
+                .expect("slave");
+            let hello = Report {
+                slave: 0,
+                consumed: 0,
+                received: 0,
+                standalone: false,
+                retry: false,
+            };
             master.on_report(0, i, &hello).expect("report");
         }
         // Serve everything owed, then run in steady state.

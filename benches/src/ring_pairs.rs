@@ -21,7 +21,11 @@ pub struct ArrayRing {
 
 impl Default for ArrayRing {
     fn default() -> Self {
-        Self { items: [0; SLOTS], read: 0, write: 0 }
+        Self {
+            items: [0; SLOTS],
+            read: 0,
+            write: 0,
+        }
     }
 }
 

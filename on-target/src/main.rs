@@ -139,11 +139,26 @@ const TESTS: &[Test] = &[
         chain::a_full_chain_hands_the_trolley_back,
     ),
     ("ring::ring_pointer_rule", ring::ring_pointer_rule),
-    ("ring::split_halves_from_a_static", ring::split_halves_from_a_static),
-    ("ring::frames_and_every_two_bit_error", ring::frames_and_every_two_bit_error),
-    ("ring::lossy_link_keeps_the_stream", ring::lossy_link_keeps_the_stream),
-    ("ring::stand_alone_and_back_at_a_row", ring::stand_alone_and_back_at_a_row),
-    ("ring::capacity_on_a_32_bit_core", ring::capacity_on_a_32_bit_core),
+    (
+        "ring::split_halves_from_a_static",
+        ring::split_halves_from_a_static,
+    ),
+    (
+        "ring::frames_and_every_two_bit_error",
+        ring::frames_and_every_two_bit_error,
+    ),
+    (
+        "ring::lossy_link_keeps_the_stream",
+        ring::lossy_link_keeps_the_stream,
+    ),
+    (
+        "ring::stand_alone_and_back_at_a_row",
+        ring::stand_alone_and_back_at_a_row,
+    ),
+    (
+        "ring::capacity_on_a_32_bit_core",
+        ring::capacity_on_a_32_bit_core,
+    ),
     ("ring::sizes_on_a_32_bit_core", ring::sizes_on_a_32_bit_core),
 ];
 

@@ -54,7 +54,13 @@ pub fn split_halves_from_a_static() -> Outcome {
 }
 
 pub fn frames_and_every_two_bit_error() -> Outcome {
-    let report = Report { slave: 3, consumed: 0xBEEF, received: 0xBF00, standalone: true, retry: true };
+    let report = Report {
+        slave: 3,
+        consumed: 0xBEEF,
+        received: 0xBF00,
+        standalone: true,
+        retry: true,
+    };
     let mut frame = [0u8; link::MAX_FRAME];
     let n = report.encode(&mut frame).map_err(|_| "encode")?;
     check!(decode(&frame[..n]) == Ok(Message::Report(report)));
@@ -78,10 +84,23 @@ fn pattern(k: u64) -> u8 {
 }
 
 pub fn lossy_link_keeps_the_stream() -> Outcome {
-    let config = SlaveConfig { address: 2, row_len: 8, silence_limit: 100_000, retry_after: 5 };
+    let config = SlaveConfig {
+        address: 2,
+        row_len: 8,
+        silence_limit: 100_000,
+        retry_after: 5,
+    };
     let mut slave: Slave<32> = Slave::new(config).map_err(|_| "slave")?;
     let mut master: Master<4> = Master::new();
-    master.attach(2, SlaveParams { capacity: 32, t0: 2 }).map_err(|_| "attach")?;
+    master
+        .attach(
+            2,
+            SlaveParams {
+                capacity: 32,
+                t0: 2,
+            },
+        )
+        .map_err(|_| "attach")?;
     let mut frame = [0u8; link::MAX_FRAME];
     let mut items = [0u8; 8];
     let (mut index, mut lost) = (0u64, 0u32);
@@ -97,9 +116,13 @@ pub fn lossy_link_keeps_the_stream() -> Outcome {
             for (k, item) in items[..n].iter_mut().enumerate() {
                 *item = pattern(g.first + k as u64);
             }
-            let len = Refill { slave: 2, first: g.first_wire(), items: &items[..n] }
-                .encode(&mut frame)
-                .map_err(|_| "refill")?;
+            let len = Refill {
+                slave: 2,
+                first: g.first_wire(),
+                items: &items[..n],
+            }
+            .encode(&mut frame)
+            .map_err(|_| "refill")?;
             // Every third refill is lost, every fourth arrives twice.
             if g.first % 3 == 1 {
                 lost += 1;
@@ -123,36 +146,55 @@ pub fn lossy_link_keeps_the_stream() -> Outcome {
 }
 
 pub fn stand_alone_and_back_at_a_row() -> Outcome {
-    let config = SlaveConfig { address: 0, row_len: 10, silence_limit: 12, retry_after: 4 };
+    let config = SlaveConfig {
+        address: 0,
+        row_len: 10,
+        silence_limit: 12,
+        retry_after: 4,
+    };
     let mut slave: Slave<32> = Slave::new(config).map_err(|_| "slave")?;
     let mut master: Master<1> = Master::new();
-    master.attach(0, SlaveParams { capacity: 32, t0: 1 }).map_err(|_| "attach")?;
+    master
+        .attach(
+            0,
+            SlaveParams {
+                capacity: 32,
+                t0: 1,
+            },
+        )
+        .map_err(|_| "attach")?;
     let mut frame = [0u8; link::MAX_FRAME];
     let mut items = [0u8; link::MAX_REFILL];
     let (mut row_source, mut mixed_rows, mut local_rows) = (None, 0u32, 0u32);
     for now in 0..3_000u64 {
         let up = !(1_000..1_500).contains(&now);
-        if let Some(report) = slave.poll_report() {
-            if up {
-                if let Ok(regler_ring_transfer::ReportOutcome::Accepted { owed: 0 }) =
-                    master.on_report(now, 0, &report)
-                {
-                    let n = Refill { slave: 0, first: 0, items: &[] }
-                        .encode(&mut frame)
-                        .map_err(|_| "keep-alive")?;
-                    let _ = slave.on_frame(&frame[..n]);
-                }
+        let report = slave.poll_report().filter(|_| up);
+        let outcome = report.map(|r| master.on_report(now, 0, &r));
+        if let Some(Ok(regler_ring_transfer::ReportOutcome::Accepted { owed: 0 })) = outcome {
+            let n = Refill {
+                slave: 0,
+                first: 0,
+                items: &[],
             }
+            .encode(&mut frame)
+            .map_err(|_| "keep-alive")?;
+            let _ = slave.on_frame(&frame[..n]);
         }
-        while up {
-            let Some(g) = master.next_refill(now, link::MAX_REFILL as u32) else { break };
+        while let Some(g) = master
+            .next_refill(now, link::MAX_REFILL as u32)
+            .filter(|_| up)
+        {
             let n = g.count as usize;
             for (k, item) in items[..n].iter_mut().enumerate() {
                 *item = pattern(g.first + k as u64);
             }
-            let len = Refill { slave: 0, first: g.first_wire(), items: &items[..n] }
-                .encode(&mut frame)
-                .map_err(|_| "refill")?;
+            let len = Refill {
+                slave: 0,
+                first: g.first_wire(),
+                items: &items[..n],
+            }
+            .encode(&mut frame)
+            .map_err(|_| "refill")?;
             let _ = slave.on_frame(&frame[..len]);
         }
         let out = slave.step(|_, _| 0xFF);
@@ -168,21 +210,35 @@ pub fn stand_alone_and_back_at_a_row() -> Outcome {
     }
     check!(slave.mode() == Mode::Linked);
     check!(mixed_rows == 0);
-    check!(local_rows >= 40 && local_rows <= 50);
+    check!((40..=50).contains(&local_rows));
     check!(slave.stats().underruns == 0 && slave.stats().standalone_entries == 1);
     Ok(())
 }
 
 pub fn capacity_on_a_32_bit_core() -> Outcome {
-    let machine = Load { t0: 2_308, ring: 256 };
-    let link = LinkSpec { item_time: 28, latency: 100 };
+    let machine = Load {
+        t0: 2_308,
+        ring: 256,
+    };
+    let link = LinkSpec {
+        item_time: 28,
+        latency: 100,
+    };
     check!(capacity::max_slaves(machine, link, 1_000) == Ok(82));
     check!(capacity::check(&[machine; 8], link).map(|v| v.is_schedulable()) == Ok(true));
     check!(capacity::min_ring(&[machine; 8], link, 0, 1024) == Ok(Some(3)));
     let tight = [Load { t0: 1000, ring: 10 }, Load { t0: 18, ring: 2 }];
     check!(
-        capacity::check(&tight, LinkSpec { item_time: 10, latency: 0 })
-            == Ok(Verdict::DeadlineMiss { interval: 18, demand: 19 })
+        capacity::check(
+            &tight,
+            LinkSpec {
+                item_time: 10,
+                latency: 0
+            }
+        ) == Ok(Verdict::DeadlineMiss {
+            interval: 18,
+            demand: 19
+        })
     );
     Ok(())
 }

@@ -250,15 +250,6 @@ impl Fraction {
             den: den_total.checked_div(g)?,
         })
     }
-
-    fn ppm(self) -> u64 {
-        let ppm = self
-            .num
-            .checked_mul(1_000_000)
-            .and_then(|n| n.checked_add(self.den.checked_div(2)?))
-            .and_then(|n| n.checked_div(self.den));
-        ppm.and_then(|p| u64::try_from(p).ok()).unwrap_or(u64::MAX)
-    }
 }
 
 fn gcd(mut a: u128, mut b: u128) -> u128 {
@@ -304,10 +295,8 @@ fn check_by(
             None => return Ok(Verdict::RingTooShort { slave: i }),
         }
     }
-    let ppm = match exact {
-        Some(sum) => sum.ppm(),
-        None => u64::try_from(rounded_up.saturating_mul(1_000_000) >> 64).unwrap_or(u64::MAX),
-    };
+    // For display: the rounded-up sum is within n·2⁻⁶⁴ of the truth.
+    let ppm = u64::try_from(rounded_up.saturating_mul(1_000_000) >> 64).unwrap_or(u64::MAX);
     // Exact when the sum of fractions fits in 128 bits, rounded up (safe) when it does not.
     let overloaded = exact.map_or(rounded_up > 1 << 64, |sum| sum.num > sum.den);
     if overloaded {

@@ -74,7 +74,8 @@ pub struct Grant {
     /// The deadline this grant served (the source's `slack · t0` after the slave's report).
     pub deadline: u64,
     /// `true` when the grant came after its deadline: the slave may underrun. Counted in
-    /// [`SlaveStatus::missed`].
+    /// [`SlaveStatus::missed`]. Never set while a slave is being filled after attach (it has
+    /// reported no consumption yet: its machine has not started).
     pub late: bool,
 }
 
@@ -122,6 +123,8 @@ struct Link {
     params: Option<SlaveParams>,
     status: SlaveStatus,
     report_at: u64,
+    /// The consumed count of the first report after attach.
+    first_consumed: u64,
 }
 
 impl Link {
@@ -142,6 +145,7 @@ impl Link {
             sent: 0,
         },
         report_at: 0,
+        first_consumed: 0,
     };
 
     fn owed(&self) -> u32 {
@@ -325,6 +329,7 @@ impl<const S: usize> Master<S> {
             status.received = received;
         } else {
             status.linked = true;
+            link.first_consumed = u64::from(report.consumed);
             status.consumed = u64::from(report.consumed);
             status.received = u64::from(report.received);
             status.sent = status.received;
@@ -365,7 +370,9 @@ impl<const S: usize> Master<S> {
         if count == 0 {
             return None;
         }
-        let late = now > deadline;
+        // A slave that has consumed nothing since it was attached is being filled: its machine
+        // has not started, so its grants cannot be late.
+        let late = now > deadline && link.status.consumed != link.first_consumed;
         if late {
             link.status.missed = link.status.missed.saturating_add(1);
             link.status.worst_lateness =
@@ -499,18 +506,22 @@ mod tests {
         )
         .unwrap();
         m.on_report(0, 0, &report(0, 0)).unwrap();
-        m.next_refill(0, 4).unwrap(); // lost on the way
+        // Filling before the machine starts is never late.
+        assert!(!m.next_refill(1_000, 4).unwrap().late);
+        m.on_report(1_010, 0, &report(2, 4)).unwrap();
+        let lost = m.next_refill(1_010, 4).unwrap();
+        assert_eq!((lost.first, lost.count), (4, 2));
         let retry = Report {
             retry: true,
-            ..report(0, 0)
+            ..report(2, 4)
         };
         assert_eq!(
-            m.on_report(50, 0, &retry),
-            Ok(ReportOutcome::Accepted { owed: 4 })
+            m.on_report(1_050, 0, &retry),
+            Ok(ReportOutcome::Accepted { owed: 2 })
         );
-        let g = m.next_refill(51, 4).unwrap();
-        assert_eq!((g.first, g.count), (0, 4));
-        assert!(g.late, "due at 50 + 0·t0 (the ring is empty), served at 51");
+        let g = m.next_refill(1_071, 4).unwrap();
+        assert_eq!((g.first, g.count), (4, 2));
+        assert!(g.late, "due at 1 050 + 2·t0 = 1 070, served at 1 071");
         assert_eq!(m.status(0).unwrap().missed, 1);
     }
 

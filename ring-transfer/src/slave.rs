@@ -94,8 +94,9 @@ pub enum Source {
     Master,
     /// The local pattern, in stand-alone mode.
     Local,
-    /// The local pattern standing in for a master item that was not there while the master
-    /// was already silent too long (the rest of the row the master's failure cut short).
+    /// The local pattern standing in for the master's items from the needle where the ring ran
+    /// dry while the master was silent too long to the end of that row (the row the master's
+    /// failure cut short; the master's items for it are skipped, so the rows stay aligned).
     Fallback,
     /// The local pattern standing in for a master item that was late although the master was
     /// not silent: an **underrun**. The master's item is skipped when it comes, so the rows
@@ -199,6 +200,7 @@ pub struct Slave<const N: usize> {
     since_report: u32,
     reported: Option<u16>,
     gap: bool,
+    cut_short: bool,
     stats: SlaveStats,
 }
 
@@ -232,6 +234,7 @@ impl<const N: usize> Slave<N> {
             since_report: 0,
             reported: None,
             gap: false,
+            cut_short: false,
             stats: SlaveStats {
                 underruns: 0,
                 fallbacks: 0,
@@ -323,6 +326,16 @@ impl<const N: usize> Slave<N> {
         let (row, col) = (self.row, self.col);
         let (item, source) = match self.mode {
             Mode::StandAlone => (local(row, col), Source::Local),
+            Mode::Linked if self.cut_short => {
+                // The rest of a row the master's failure cut short: local items; the master's
+                // items for these needles are skipped (taken from the ring if they are there).
+                self.consumed = self.consumed.wrapping_add(1);
+                if self.ring.next().is_none() {
+                    self.received = self.received.wrapping_add(1);
+                }
+                self.stats.fallbacks = self.stats.fallbacks.saturating_add(1);
+                (local(row, col), Source::Fallback)
+            }
             Mode::Linked => {
                 if let Some(item) = self.ring.next() {
                     self.consumed = self.consumed.wrapping_add(1);
@@ -336,6 +349,7 @@ impl<const N: usize> Slave<N> {
                     self.received = self.received.wrapping_add(1);
                     let source = if self.master_silent() {
                         self.stats.fallbacks = self.stats.fallbacks.saturating_add(1);
+                        self.cut_short = true;
                         Source::Fallback
                     } else {
                         self.stats.underruns = self.stats.underruns.saturating_add(1);
@@ -349,6 +363,7 @@ impl<const N: usize> Slave<N> {
         self.col = self.col.saturating_add(1);
         if self.col >= self.config.row_len {
             self.col = 0;
+            self.cut_short = false;
             self.row = self.row.wrapping_add(1);
             if self.mode == Mode::StandAlone {
                 self.stats.standalone_rows = self.stats.standalone_rows.saturating_add(1);

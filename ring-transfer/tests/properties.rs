@@ -399,7 +399,7 @@ fn simulate(loads: &[Load], link: LinkSpec, phases: &[u64], horizon: u64) -> (u6
             }
         }
         for i in 0..n {
-            if now >= phases[i] && (now - phases[i]) % loads[i].t0 == 0 {
+            if now >= phases[i] && (now - phases[i]).is_multiple_of(loads[i].t0) {
                 if held[i] == 0 {
                     underruns += 1;
                 } else {

@@ -71,10 +71,10 @@ fn run(row_len: u16, silences: &[(u64, u64)], steps: u64) -> Run {
                 }
             }
         }
-        while up {
-            let Some(g) = master.next_refill(now, link::MAX_REFILL as u32) else {
-                break;
-            };
+        while let Some(g) = master
+            .next_refill(now, link::MAX_REFILL as u32)
+            .filter(|_| up)
+        {
             let n = g.count as usize;
             for (k, item) in items[..n].iter_mut().enumerate() {
                 *item = stream(g.first + k as u64);

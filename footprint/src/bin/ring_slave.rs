@@ -17,7 +17,12 @@ static mut OUT: u8 = 0;
 fn main() -> ! {
     let row_len = unsafe { read_volatile(addr_of!(ROW)) };
     let t0 = unsafe { read_volatile(addr_of!(T0)) };
-    let config = SlaveConfig { address: 1, row_len, silence_limit: 64, retry_after: 16 };
+    let config = SlaveConfig {
+        address: 1,
+        row_len,
+        silence_limit: 64,
+        retry_after: 16,
+    };
     let Ok(mut slave) = stack("Slave::<256>::new", || Slave::<256>::new(config)) else {
         refused()
     };
@@ -40,7 +45,11 @@ fn main() -> ! {
             for (k, item) in items.iter_mut().take(n).enumerate() {
                 *item = (grant.first as u8).wrapping_add(k as u8);
             }
-            let refill = Refill { slave: 1, first: grant.first_wire(), items: &items[..n] };
+            let refill = Refill {
+                slave: 1,
+                first: grant.first_wire(),
+                items: &items[..n],
+            };
             if let Ok(len) = refill.encode(&mut frame) {
                 let _ = slave.on_frame(&frame[..len]);
             }
@@ -50,10 +59,18 @@ fn main() -> ! {
     };
     if MEASURING {
         for _ in 0..3 {
-            stack("Slave round: report, EDF, refill frame, step", || round(&mut slave, &mut master));
+            stack("Slave round: report, EDF, refill frame, step", || {
+                round(&mut slave, &mut master)
+            });
         }
         let mut buf = [0u8; link::MAX_FRAME];
-        let n = Refill { slave: 1, first: 0, items: &[1, 2, 3] }.encode(&mut buf).unwrap_or(0);
+        let n = Refill {
+            slave: 1,
+            first: 0,
+            items: &[1, 2, 3],
+        }
+        .encode(&mut buf)
+        .unwrap_or(0);
         let _ = stack("Slave::on_frame", || slave.on_frame(&buf[..n]));
         let _ = stack("Slave::step", || slave.step(|_, _| 0));
         finish();

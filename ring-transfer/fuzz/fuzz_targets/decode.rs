@@ -19,7 +19,16 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     let mut master: Master<2> = Master::new();
-    if master.attach(1, SlaveParams { capacity: 16, t0: 3 }).is_err() {
+    if master
+        .attach(
+            1,
+            SlaveParams {
+                capacity: 16,
+                t0: 3,
+            },
+        )
+        .is_err()
+    {
         return;
     }
     let mut buf = [0u8; link::MAX_FRAME];
