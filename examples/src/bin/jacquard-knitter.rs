@@ -264,21 +264,25 @@ fn interactive(sim: &mut Sim, args: &Args) -> Result<(), String> {
 }
 
 fn report(summary: &Summary, args: &Args) -> Result<(), String> {
+    use std::io::Write;
+    let mut text = String::new();
     if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(summary).map_err(|e| e.to_string())?
-        );
-        return Ok(());
-    }
-    if !args.quiet && !args.interactive {
-        for line in &summary.screen {
-            println!("{line}");
+        text = serde_json::to_string_pretty(summary).map_err(|e| e.to_string())?;
+    } else {
+        if !args.quiet && !args.interactive {
+            for line in &summary.screen {
+                text.push_str(line);
+                text.push('\n');
+            }
+        }
+        text.push_str(&summary.table());
+        if !args.no_picture {
+            text.push_str(&format!("\nfabric: {}", args.png.display()));
         }
     }
-    println!("{}", summary.table());
-    if !args.no_picture {
-        println!("fabric: {}", args.png.display());
+    // A reader that stops early (`| head`) is not an error of ours.
+    match writeln!(std::io::stdout().lock(), "{text}") {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(format!("cannot write: {e}")),
+        _ => Ok(()),
     }
-    Ok(())
 }
