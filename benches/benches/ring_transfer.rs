@@ -64,6 +64,33 @@ fn pairs(c: &mut Criterion) {
 
 const TRANSFER: u32 = 10_000_000;
 
+/// Moves `TRANSFER` items from a producer thread (`push`, spinning while full) to this thread
+/// (`pop`); returns their sum.
+fn transfer(
+    mut push: impl FnMut(u32) -> Result<(), u32> + Send,
+    mut pop: impl FnMut() -> Option<u32>,
+) -> u64 {
+    std::thread::scope(|s| {
+        s.spawn(move || {
+            for i in 0..TRANSFER {
+                let mut item = i;
+                while let Err(back) = push(item) {
+                    item = back;
+                    std::hint::spin_loop();
+                }
+            }
+        });
+        let (mut sum, mut got) = (0u64, 0);
+        while got < TRANSFER {
+            if let Some(item) = pop() {
+                sum = sum.wrapping_add(u64::from(item));
+                got += 1;
+            }
+        }
+        sum
+    })
+}
+
 fn two_threads(c: &mut Criterion) {
     let mut group = c.benchmark_group("ring/two-thread transfer");
     group.sample_size(10);
@@ -72,52 +99,14 @@ fn two_threads(c: &mut Criterion) {
         b.iter(|| {
             let mut shared: Box<SharedRing<u32, { SLOTS + 1 }>> = Box::default();
             let (mut filler, mut drainer) = shared.split();
-            std::thread::scope(|s| {
-                s.spawn(move || {
-                    for i in 0..TRANSFER {
-                        let mut item = i;
-                        while let Err(back) = filler.receive(item) {
-                            item = back;
-                            std::hint::spin_loop();
-                        }
-                    }
-                });
-                let mut sum = 0u64;
-                let mut got = 0;
-                while got < TRANSFER {
-                    if let Some(item) = drainer.next() {
-                        sum = sum.wrapping_add(u64::from(item));
-                        got += 1;
-                    }
-                }
-                black_box(sum)
-            })
+            black_box(transfer(|x| filler.receive(x), || drainer.next()))
         })
     });
     group.bench_function("heapless Producer+Consumer", |b| {
         b.iter(|| {
             let mut queue: Box<Queue<u32, { SLOTS + 1 }>> = Box::default();
             let (mut producer, mut consumer) = queue.split();
-            std::thread::scope(|s| {
-                s.spawn(move || {
-                    for i in 0..TRANSFER {
-                        let mut item = i;
-                        while let Err(back) = producer.enqueue(item) {
-                            item = back;
-                            std::hint::spin_loop();
-                        }
-                    }
-                });
-                let mut sum = 0u64;
-                let mut got = 0;
-                while got < TRANSFER {
-                    if let Some(item) = consumer.dequeue() {
-                        sum = sum.wrapping_add(u64::from(item));
-                        got += 1;
-                    }
-                }
-                black_box(sum)
-            })
+            black_box(transfer(|x| producer.enqueue(x), || consumer.dequeue()))
         })
     });
     group.finish();

@@ -178,7 +178,7 @@ pub struct SlaveStats {
 /// let n = Refill { slave: 3, first: 0, items: &[1, 2, 3, 4, 5, 6, 7, 8] }.encode(&mut frame)?;
 /// assert_eq!(slave.on_frame(&frame[..n]), Ok(8));
 /// assert_eq!(slave.step(rom).item, 1);
-/// let report = slave.poll_report().unwrap(); // one consumed: ask for one more
+/// let report = slave.poll_report().ok_or("one consumed: a report is due")?;
 /// assert_eq!((report.consumed, report.received), (1, 8));
 ///
 /// // The master falls silent; the ring covers two whole rows, then the slave runs stand-alone.
