@@ -1,0 +1,576 @@
+//! The L-type crate controller: one byte in, one byte out, one byte of delay.
+
+use core::fmt;
+
+use heapless::Deque;
+
+use super::{
+    COLUMNS, END, M1, M2, NON_ADDRESSED, SPACE, STATION_MARK, WAIT, data_bytes, endsum_byte,
+    is_delimiter, is_read, is_write, row_parity_ok, with_parity,
+};
+
+/// What a CAMAC dataway cycle answered.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Cycle {
+    /// The read lines (24 bits used; sent back for F0–F7).
+    pub read: u32,
+    /// X: the module accepted the command.
+    pub x: bool,
+    /// Q: the module's answer (e.g. "LAM was set", "data valid").
+    pub q: bool,
+}
+
+/// The crate behind a controller: the modules on its dataway.
+pub trait Dataway {
+    /// Runs one dataway cycle N·A·F, with the write data for F16–F23.
+    fn cycle(&mut self, station: u8, subaddress: u8, function: u8, write: Option<u32>) -> Cycle;
+
+    /// The graded LAM (5 bits, 0 = no request) the controller reports in a demand.
+    fn graded_lam(&mut self) -> u8 {
+        0
+    }
+}
+
+/// How a [`Controller`] is set up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ControllerConfig {
+    /// The crate address, 1–62.
+    pub address: u8,
+    /// Send the demand again after this many byte clocks while the graded LAM stays the same and
+    /// non-zero (a demand lost on the loop is not lost for good); 0 = only when it changes.
+    pub demand_repeat: u32,
+}
+
+impl Default for ControllerConfig {
+    fn default() -> Self {
+        Self { address: 1, demand_repeat: 4096 }
+    }
+}
+
+/// Why a configuration was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// Crate addresses are 1–62 (0 is the driver, 63 addresses no crate).
+    Address(u8),
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Address(a) => write!(f, "crate address must be 1..=62, got {a}"),
+        }
+    }
+}
+
+impl core::error::Error for ConfigError {}
+
+/// What a controller has seen and done.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ControllerStats {
+    /// Commands addressed to this crate.
+    pub commands: u64,
+    /// Dataway cycles run (clean commands).
+    pub executed: u64,
+    /// Addressed commands refused for an error (answered with ERR).
+    pub errors: u64,
+    /// Addressed commands that ended before their reply room (no reply possible).
+    pub truncated: u64,
+    /// Demands sent.
+    pub demands: u64,
+    /// Messages for other crates passed on.
+    pub passed: u64,
+}
+
+/// Where the receiver stands in the incoming stream.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+enum Rx {
+    /// Between messages: delimiters are gap filler.
+    Between,
+    /// A header arrived; the second byte tells the type.
+    Second { header: u8 },
+    /// Passing a message for someone else on, until its delimiter.
+    Passing,
+    /// Taking a command addressed to this crate.
+    Command,
+}
+
+/// The L-type crate controller as a byte machine on the loop.
+///
+/// Each [`clock`](Self::clock) takes the byte arriving from upstream and returns the byte for
+/// downstream, one byte late. A command with this crate's address is taken off the loop: the
+/// controller answers the short reply (header + END) at once, puts WAIT in place of the rest of
+/// the command text, checks row parity, layout and the column sum, runs the dataway cycle only if
+/// all are clean, and writes its reply (header, status with ERR/SX/SQ/DERR, data for reads,
+/// ENDSUM) over the SPACE bytes. Between messages it may send a demand (header, SGL, ENDSUM),
+/// holding up to 3 bytes of a following message meanwhile; the WAIT bytes of the next gap give the
+/// time back.
+///
+/// ```
+/// use regler_panel_link::highway::{decode, Controller, ControllerConfig, Cycle, Dataway, Message, Status, MAX_MESSAGE};
+///
+/// struct Register(u32);
+/// impl Dataway for Register {
+///     fn cycle(&mut self, _n: u8, _a: u8, f: u8, write: Option<u32>) -> Cycle {
+///         if let Some(w) = write { self.0 = w; }
+///         Cycle { read: if f == 0 { self.0 } else { 0 }, x: true, q: true }
+///     }
+/// }
+///
+/// let mut crate_ = Register(0);
+/// let mut controller = Controller::new(ControllerConfig { address: 3, ..Default::default() })?;
+/// let write = Message::Command { crate_address: 3, station: 1, subaddress: 0, function: 16, data: Some(0x1234) };
+/// let mut buf = [0u8; MAX_MESSAGE];
+/// let len = write.encode(&mut buf)?;
+/// let out: Vec<u8> = buf[..len].iter().chain(&[0xE0]).map(|&b| controller.clock(b, &mut crate_)).collect();
+/// // One byte late: header, END (the short reply), WAITs, then the reply over the SPACEs.
+/// assert_eq!(&out[1..3], &[buf[0], 0xE0]);
+/// assert_eq!(decode(&out[10..13]), Ok(Message::Reply { crate_address: 3, status: Status { x: true, q: true, ..Status::default() }, data: None }));
+/// assert_eq!(crate_.0, 0x1234);
+/// # Ok::<(), Box<dyn core::error::Error>>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct Controller {
+    config: ControllerConfig,
+    /// Bytes decided but not yet sent: the one-byte delay, plus up to 3 held behind a demand.
+    out: Deque<u8, 4>,
+    rx: Rx,
+    // The addressed command being taken.
+    pos: u8,
+    columns: u8,
+    error: bool,
+    subaddress: u8,
+    function: u8,
+    station: u8,
+    data: u32,
+    sum_at: u8,
+    reply: [u8; 7],
+    reply_len: u8,
+    reply_sent: u8,
+    answered: bool,
+    /// The last command had an error (reported as DERR in the next reply).
+    last_error: bool,
+    // Demands.
+    last_sgl: u8,
+    since_demand: u32,
+    stats: ControllerStats,
+}
+
+impl Controller {
+    /// A controller for the crate at `config.address`.
+    ///
+    /// # Errors
+    /// [`ConfigError::Address`] unless the address is 1–62.
+    pub const fn new(config: ControllerConfig) -> Result<Self, ConfigError> {
+        if config.address == 0 || config.address >= NON_ADDRESSED {
+            return Err(ConfigError::Address(config.address));
+        }
+        Ok(Self {
+            config,
+            out: Deque::new(),
+            rx: Rx::Between,
+            pos: 0,
+            columns: 0,
+            error: false,
+            subaddress: 0,
+            function: 0,
+            station: 0,
+            data: 0,
+            sum_at: 0,
+            reply: [WAIT; 7],
+            reply_len: 0,
+            reply_sent: 0,
+            answered: false,
+            last_error: false,
+            last_sgl: 0,
+            since_demand: 0,
+            stats: ControllerStats {
+                commands: 0,
+                executed: 0,
+                errors: 0,
+                truncated: 0,
+                demands: 0,
+                passed: 0,
+            },
+        })
+    }
+
+    /// The configuration.
+    #[must_use]
+    pub const fn config(&self) -> &ControllerConfig {
+        &self.config
+    }
+
+    /// What this controller has seen and done.
+    #[must_use]
+    pub const fn stats(&self) -> &ControllerStats {
+        &self.stats
+    }
+
+    /// Bytes held back beyond the one-byte delay (0–3, non-zero after a demand).
+    #[must_use]
+    pub fn held(&self) -> usize {
+        self.out.len().saturating_sub(1)
+    }
+
+    /// One byte clock: takes the byte from upstream, returns the byte for downstream.
+    pub fn clock<D: Dataway + ?Sized>(&mut self, input: u8, dataway: &mut D) -> u8 {
+        let out = self.out.pop_front().unwrap_or(WAIT);
+        let decided = self.take(input, dataway);
+        let gap = decided.is_none();
+        let byte = decided.unwrap_or(WAIT);
+        let boundary = self.rx == Rx::Between;
+        self.since_demand = self.since_demand.saturating_add(1);
+        if boundary && self.out.is_empty() {
+            if let Some(sgl) = self.demand_due(dataway) {
+                if !gap {
+                    self.hold(byte);
+                }
+                let header = with_parity(self.config.address);
+                let sgl_byte = with_parity(M2 | sgl);
+                self.hold(header);
+                self.hold(sgl_byte);
+                self.hold(endsum_byte(&[header, sgl_byte]));
+                self.stats.demands = self.stats.demands.saturating_add(1);
+                return out;
+            }
+        }
+        // A gap byte is dropped while bytes are held: that is how the delay shrinks back to one.
+        if !gap || self.out.is_empty() {
+            self.hold(byte);
+        }
+        out
+    }
+
+    fn hold(&mut self, byte: u8) {
+        // Capacity 4 = delay + 3 held; `clock` never holds more (a demand only starts when
+        // nothing is held), so this cannot fail.
+        let _ = self.out.push_back(byte);
+    }
+
+    fn demand_due<D: Dataway + ?Sized>(&mut self, dataway: &mut D) -> Option<u8> {
+        let sgl = dataway.graded_lam() & 0x1F;
+        if sgl == 0 {
+            self.last_sgl = 0;
+            return None;
+        }
+        let repeat = self.config.demand_repeat != 0 && self.since_demand >= self.config.demand_repeat;
+        if sgl != self.last_sgl || repeat {
+            self.last_sgl = sgl;
+            self.since_demand = 0;
+            return Some(sgl);
+        }
+        None
+    }
+
+    /// Decides the byte that goes out in the place of `input`; `None` for gap filler.
+    fn take<D: Dataway + ?Sized>(&mut self, input: u8, dataway: &mut D) -> Option<u8> {
+        match self.rx {
+            Rx::Between => {
+                if is_delimiter(input) {
+                    return None;
+                }
+                self.rx = Rx::Second { header: input };
+                Some(input)
+            }
+            Rx::Second { header } => {
+                if is_delimiter(input) {
+                    // Header + END: a truncated command is answered at once by passing it on —
+                    // it is itself the short reply.
+                    self.rx = Rx::Between;
+                    return Some(input);
+                }
+                let ours = row_parity_ok(header) && header & COLUMNS == self.config.address;
+                // A reply or demand with our header cannot be for us: only commands are.
+                let command = !row_parity_ok(input) || input & (M1 | M2) == 0;
+                if ours && command {
+                    self.start_command(header, input);
+                    Some(END)
+                } else {
+                    self.rx = Rx::Passing;
+                    self.stats.passed = self.stats.passed.saturating_add(1);
+                    Some(input)
+                }
+            }
+            Rx::Passing => {
+                if is_delimiter(input) {
+                    self.rx = Rx::Between;
+                }
+                Some(input)
+            }
+            Rx::Command => Some(self.command_byte(input, dataway)),
+        }
+    }
+
+    fn start_command(&mut self, header: u8, sa: u8) {
+        self.rx = Rx::Command;
+        self.stats.commands = self.stats.commands.saturating_add(1);
+        self.pos = 2;
+        self.columns = (header ^ sa) & COLUMNS;
+        self.error = !row_parity_ok(sa);
+        self.subaddress = sa & 0x0F;
+        self.function = 0;
+        self.station = 0;
+        self.data = 0;
+        self.sum_at = 4;
+        self.reply_len = 0;
+        self.reply_sent = 0;
+        self.answered = false;
+    }
+
+    fn command_byte<D: Dataway + ?Sized>(&mut self, input: u8, dataway: &mut D) -> u8 {
+        let pos = self.pos;
+        self.pos = self.pos.saturating_add(1);
+        if is_delimiter(input) {
+            // END (or a damaged byte that looks like one): the command is over.
+            self.rx = Rx::Between;
+            if !self.answered {
+                self.stats.truncated = self.stats.truncated.saturating_add(1);
+                self.last_error = true;
+            }
+            return END;
+        }
+        if self.answered {
+            // Reply room: the rest of the reply, then WAIT for any SPACE beyond it.
+            if self.reply_sent < self.reply_len {
+                let byte = self.reply.get(usize::from(self.reply_sent)).copied().unwrap_or(WAIT);
+                self.reply_sent = self.reply_sent.saturating_add(1);
+                return byte;
+            }
+            return WAIT;
+        }
+        if pos <= self.sum_at && !row_parity_ok(input) {
+            self.error = true;
+        }
+        if pos <= self.sum_at {
+            self.columns ^= input & COLUMNS;
+        }
+        match pos {
+            2 => {
+                self.function = input & 0x1F;
+                if input & 0x20 != 0 {
+                    self.error = true;
+                }
+                self.sum_at = if is_write(self.function) { 8 } else { 4 };
+            }
+            3 => {
+                self.station = input & 0x1F;
+                if input & STATION_MARK == 0 {
+                    self.error = true;
+                }
+            }
+            p if p < self.sum_at => {
+                self.data = (self.data << 6) | u32::from(input & COLUMNS);
+            }
+            p if p == self.sum_at => {
+                if self.columns != 0 {
+                    self.error = true;
+                }
+            }
+            _ => {
+                // The first byte of the reply room: the command is complete.
+                if input != SPACE {
+                    self.error = true;
+                }
+                self.answer(dataway);
+                self.reply_sent = 1;
+                return self.reply.first().copied().unwrap_or(WAIT);
+            }
+        }
+        WAIT
+    }
+
+    fn answer<D: Dataway + ?Sized>(&mut self, dataway: &mut D) {
+        self.answered = true;
+        let error = self.error;
+        let mut status = if error { 1 } else { 0 };
+        if self.last_error {
+            status |= 8;
+        }
+        self.last_error = error;
+        let mut read = None;
+        if error {
+            self.stats.errors = self.stats.errors.saturating_add(1);
+        } else {
+            self.stats.executed = self.stats.executed.saturating_add(1);
+            let write = if is_write(self.function) { Some(self.data) } else { None };
+            let cycle = dataway.cycle(self.station, self.subaddress, self.function, write);
+            status |= u8::from(cycle.x) << 1 | u8::from(cycle.q) << 2;
+            if is_read(self.function) {
+                read = Some(cycle.read & 0xFF_FFFF);
+            }
+        }
+        let header = with_parity(self.config.address);
+        let status = with_parity(M1 | status);
+        self.reply = [WAIT; 7];
+        let len = match read {
+            Some(word) => {
+                let [d0, d1, d2, d3] = data_bytes(word);
+                let text = [header, status, d0, d1, d2, d3];
+                self.reply = [header, status, d0, d1, d2, d3, endsum_byte(&text)];
+                7
+            }
+            None => {
+                self.reply[0] = header;
+                self.reply[1] = status;
+                self.reply[2] = endsum_byte(&[header, status]);
+                3
+            }
+        };
+        self.reply_len = len;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{MAX_MESSAGE, Message, Status, decode};
+    use super::*;
+
+    #[derive(Default)]
+    struct Crate {
+        regs: [u32; 4],
+        cycles: Vec<(u8, u8, u8, Option<u32>)>,
+        lam: u8,
+    }
+
+    impl Dataway for Crate {
+        fn cycle(&mut self, n: u8, a: u8, f: u8, write: Option<u32>) -> Cycle {
+            self.cycles.push((n, a, f, write));
+            let reg = usize::from(a & 3);
+            if let Some(w) = write {
+                self.regs[reg] = w;
+            }
+            Cycle { read: self.regs[reg], x: true, q: f < 8 }
+        }
+        fn graded_lam(&mut self) -> u8 {
+            self.lam
+        }
+    }
+
+    fn run(c: &mut Controller, crate_: &mut Crate, input: &[u8]) -> Vec<u8> {
+        input.iter().chain(&[WAIT; 8]).map(|&b| c.clock(b, crate_)).collect()
+    }
+
+    fn encode(m: Message) -> Vec<u8> {
+        let mut buf = [0u8; MAX_MESSAGE];
+        let len = m.encode(&mut buf).unwrap();
+        buf[..len].to_vec()
+    }
+
+    /// The messages in an output stream (skipping gap delimiters).
+    fn messages(stream: &[u8]) -> Vec<Vec<u8>> {
+        let mut out = Vec::new();
+        let mut cur = Vec::new();
+        for &b in stream {
+            if cur.is_empty() && is_delimiter(b) {
+                continue;
+            }
+            cur.push(b);
+            if is_delimiter(b) {
+                out.push(std::mem::take(&mut cur));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn config_is_checked() {
+        for bad in [0, 63, 64, 255] {
+            assert_eq!(
+                Controller::new(ControllerConfig { address: bad, demand_repeat: 0 }).err(),
+                Some(ConfigError::Address(bad))
+            );
+        }
+    }
+
+    #[test]
+    fn read_is_answered_over_the_spaces_with_one_byte_of_delay() {
+        let mut c = Controller::new(ControllerConfig { address: 7, demand_repeat: 0 }).unwrap();
+        let mut crate_ = Crate { regs: [0x12_3456, 0, 0, 0], ..Crate::default() };
+        let cmd = encode(Message::Command { crate_address: 7, station: 2, subaddress: 0, function: 0, data: None });
+        let out = run(&mut c, &mut crate_, &cmd);
+        assert_eq!(out.len(), cmd.len() + 8);
+        assert_eq!(out[0], WAIT);
+        let found = messages(&out);
+        assert_eq!(found.len(), 2, "{out:x?}");
+        assert_eq!(decode(&found[0]), Err(super::super::DecodeError::Truncated { crate_address: 7 }));
+        assert_eq!(
+            decode(&found[1]),
+            Ok(Message::Reply {
+                crate_address: 7,
+                status: Status { x: true, q: true, ..Status::default() },
+                data: Some(0x12_3456)
+            })
+        );
+        assert_eq!(crate_.cycles, vec![(2, 0, 0, None)]);
+        // The reply sits exactly where the SPACE bytes were (one byte late).
+        assert_eq!(&out[6..13], &found[1][..]);
+    }
+
+    #[test]
+    fn other_crates_messages_pass_unchanged_one_byte_late() {
+        let mut c = Controller::new(ControllerConfig { address: 7, demand_repeat: 0 }).unwrap();
+        let mut crate_ = Crate::default();
+        let mut stream = encode(Message::Command { crate_address: 8, station: 2, subaddress: 0, function: 16, data: Some(5) });
+        stream.extend(encode(Message::Reply { crate_address: 7, status: Status::default(), data: None }));
+        stream.extend(encode(Message::Demand { crate_address: 7, sgl: 3 }));
+        let out = run(&mut c, &mut crate_, &stream);
+        assert_eq!(&out[1..=stream.len()], &stream[..]);
+        assert!(crate_.cycles.is_empty());
+        assert_eq!(c.stats().passed, 3);
+    }
+
+    #[test]
+    fn a_corrupt_command_is_answered_with_err_and_not_run_then_derr() {
+        let mut c = Controller::new(ControllerConfig { address: 7, demand_repeat: 0 }).unwrap();
+        let mut crate_ = Crate::default();
+        let mut cmd = encode(Message::Command { crate_address: 7, station: 2, subaddress: 1, function: 16, data: Some(77) });
+        cmd[5] ^= 0x03; // two column bits: row parity holds, the sum does not
+        let out = run(&mut c, &mut crate_, &cmd);
+        let found = messages(&out);
+        let err = Status { err: true, ..Status::default() };
+        assert_eq!(decode(&found[1]), Ok(Message::Reply { crate_address: 7, status: err, data: None }));
+        assert!(crate_.cycles.is_empty());
+        // The next, clean command runs and reports the earlier error as DERR.
+        let cmd = encode(Message::Command { crate_address: 7, station: 2, subaddress: 1, function: 16, data: Some(77) });
+        let found = messages(&run(&mut c, &mut crate_, &cmd));
+        let derr = Status { derr: true, x: true, ..Status::default() };
+        assert_eq!(decode(&found[1]), Ok(Message::Reply { crate_address: 7, status: derr, data: None }));
+        assert_eq!(crate_.cycles, vec![(2, 1, 16, Some(77))]);
+        assert_eq!(c.stats().errors, 1);
+        assert_eq!(c.stats().executed, 1);
+    }
+
+    #[test]
+    fn demand_goes_out_between_messages_and_the_delay_shrinks_back() {
+        let mut c = Controller::new(ControllerConfig { address: 5, demand_repeat: 0 }).unwrap();
+        let mut crate_ = Crate::default();
+        let passing = encode(Message::Reply { crate_address: 9, status: Status::default(), data: Some(1) });
+        let mut stream = passing.clone();
+        stream.extend(&passing); // back to back: no gap
+        crate_.lam = 0;
+        let mut out = Vec::new();
+        for (k, &b) in stream.iter().chain(&[WAIT; 10]).enumerate() {
+            if k == 3 {
+                crate_.lam = 4; // LAM raised in the middle of a passing message
+            }
+            out.push(c.clock(b, &mut crate_));
+            assert!(c.held() <= 3);
+        }
+        let found = messages(&out);
+        assert_eq!(found.len(), 3, "{out:x?}");
+        assert_eq!(found[0], passing);
+        assert_eq!(decode(&found[1]), Ok(Message::Demand { crate_address: 5, sgl: 4 }));
+        assert_eq!(found[2], passing);
+        assert_eq!(c.held(), 0);
+        assert_eq!(c.stats().demands, 1);
+    }
+}

@@ -1,0 +1,706 @@
+//! The CAMAC serial highway (source 004): bytes, messages, the driver and the L-type crate
+//! controller.
+//!
+//! # Bytes
+//! Bits are numbered 1 to 8 as in the source; bit *k* is `1 << (k − 1)`.
+//! - **Bit 8 is row parity**: every byte on the highway has an **odd** number of ones.
+//! - **Bit 7 is the delimiter**: 0 in the header and every text byte (and SPACE), 1 in END,
+//!   ENDSUM and WAIT.
+//! - Bits 1–6 are the columns: the crate address in the header, the fields of the text bytes,
+//!   six bits of data per data byte (most significant first: SW24–19, SW18–13, SW12–7, SW6–1),
+//!   the column sums in SUM and ENDSUM.
+//!
+//! | byte | bits 1–6 | bit 7 | value |
+//! |---|---|---|---|
+//! | header | crate address 0–63 (SC0 is the driver, SC63 addresses no crate) | 0 | |
+//! | SA (command) | A in bits 1–4, M1 = bit 5 = 0, M2 = bit 6 = 0 | 0 | |
+//! | SF | F in bits 1–5, bit 6 = 0 | 0 | |
+//! | SN | N in bits 1–5, bit 6 = 1 | 0 | |
+//! | data | 6 bits of the 24-bit word | 0 | |
+//! | status (reply) | ERR, SX, SQ, DERR in bits 1–4, M1 = 1, M2 = 0 | 0 | |
+//! | SGL (demand) | graded LAM in bits 1–5, M2 = bit 6 = 1 | 0 | |
+//! | SUM | even column parity | 0 | |
+//! | SPACE | all six 1 | 0 | [`SPACE`] = `0xBF` |
+//! | END, WAIT | bits 1–5 = 0, bits 6–8 = 1 | 1 | [`END`] = [`WAIT`] = `0xE0` |
+//! | ENDSUM | even column parity | 1 | |
+//!
+//! The message type sits in bits 5–6 of the second byte: M2 M1 = 00 command, 01 reply, 1x demand
+//! (in a demand, bit 5 is the fifth SGL bit).
+//!
+//! # Messages
+//! - Command: header, SA, SF, SN, \[4 write-data bytes for F16–F23\], SUM, SPACE × n, END, with
+//!   n at least the length of the reply it asks for (3, or 7 for the reads F0–F7): the crate
+//!   controller writes its reply over them. [`Message::encode`] sends exactly that many.
+//! - Reply: header, status, \[4 data bytes for F0–F7\], ENDSUM (3 or 7 bytes).
+//! - Demand: header, SGL, ENDSUM (3 bytes).
+//! - A truncated command or short reply, header + END, is not a message: [`decode`] names it
+//!   ([`DecodeError::Truncated`]).
+//!
+//! # Which bytes the column sums cover (our reading of the source)
+//! The source says the SUM byte's first six bits give even column parity "over the message text"
+//! and that ENDSUM ends replies "with the column sums". We read it as: the column sum covers
+//! **every byte from the header to the byte before SUM/ENDSUM**, header included, SPACE and END
+//! excluded (they are filler the controller overwrites, not text); the SUM/ENDSUM byte's bits
+//! 1–6 make the XOR of bits 1–6 over header … SUM zero. Covering the header matters: a header
+//! whose two column bits flip would otherwise send a command to another crate unnoticed.
+//!
+//! # What the checks catch
+//! Every odd number of flipped bits breaks some byte's row parity. Two flips in one byte change
+//! two columns (caught by the sum), a column and the delimiter, or the delimiter and the parity
+//! (caught by the layout rules: delimiter where text belongs, SPACE or END not exact); two flips
+//! in two bytes break two rows. So every 1-, 2- and 3-bit error is rejected — the crate's tests
+//! check it exhaustively. The smallest undetected error is four flips on a rectangle (two bytes,
+//! the same two columns).
+
+mod controller;
+mod driver;
+
+pub use controller::{ConfigError, Controller, ControllerConfig, ControllerStats, Cycle, Dataway};
+pub use driver::{
+    Completion, Driver, DriverConfig, DriverError, DriverEvent, DriverStats, Failure, Step,
+};
+
+use core::fmt;
+
+/// SPACE: the filler a command carries for the reply (bits 1–6 and 8 set).
+pub const SPACE: u8 = 0xBF;
+/// END: the last byte of a command (bits 6–8 set).
+pub const END: u8 = 0xE0;
+/// WAIT: the byte a controller puts where it removed one, and the driver between messages; the
+/// same bit pattern as [`END`] — its meaning comes from where it stands.
+pub const WAIT: u8 = END;
+/// Delimiter bit (bit 7).
+pub const DELIMITER: u8 = 0x40;
+/// Row-parity bit (bit 8).
+pub const PARITY: u8 = 0x80;
+/// The six column bits (bits 1–6).
+pub const COLUMNS: u8 = 0x3F;
+/// The non-addressed header SC63: no crate controller answers it.
+pub const NON_ADDRESSED: u8 = 63;
+/// The longest encoded message: a write (8 text bytes, SUM, 3 SPACE, END) or a read (4 text
+/// bytes, SUM, 7 SPACE, END), 13 bytes.
+pub const MAX_MESSAGE: usize = 13;
+
+const M1: u8 = 0x10;
+const M2: u8 = 0x20;
+const STATION_MARK: u8 = 0x20;
+
+/// `bits` (bits 1–7) with bit 8 set so that the byte has an odd number of ones.
+#[must_use]
+pub const fn with_parity(bits: u8) -> u8 {
+    let bits = bits & 0x7F;
+    if bits.count_ones() & 1 == 0 { bits | PARITY } else { bits }
+}
+
+/// True when `byte` has odd row parity.
+#[must_use]
+pub const fn row_parity_ok(byte: u8) -> bool {
+    byte.count_ones() & 1 == 1
+}
+
+/// True when `byte` is a delimiter (END, ENDSUM or WAIT: bit 7 set).
+#[must_use]
+pub const fn is_delimiter(byte: u8) -> bool {
+    byte & DELIMITER != 0
+}
+
+/// True for the CAMAC functions that carry write data in the command (F16–F23).
+#[must_use]
+pub const fn is_write(function: u8) -> bool {
+    matches!(function, 16..=23)
+}
+
+/// True for the CAMAC functions whose reply carries read data (F0–F7).
+#[must_use]
+pub const fn is_read(function: u8) -> bool {
+    function <= 7
+}
+
+/// The length of the reply a command with `function` asks for: 7 for reads, 3 otherwise.
+#[must_use]
+pub const fn reply_len(function: u8) -> usize {
+    if is_read(function) { 7 } else { 3 }
+}
+
+/// The status byte of a reply.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Status {
+    /// ERR: the controller found an error in this command and did not run it.
+    pub err: bool,
+    /// SX: the X (command accepted) response of the crate's dataway cycle.
+    pub x: bool,
+    /// SQ: the Q response of the dataway cycle.
+    pub q: bool,
+    /// DERR: the controller found an error in the command before this one.
+    pub derr: bool,
+}
+
+impl Status {
+    /// Bits 1–4 of the status byte.
+    #[must_use]
+    pub const fn bits(self) -> u8 {
+        (self.err as u8) | (self.x as u8) << 1 | (self.q as u8) << 2 | (self.derr as u8) << 3
+    }
+
+    /// The status in bits 1–4 of `bits`.
+    #[must_use]
+    pub const fn from_bits(bits: u8) -> Self {
+        Self { err: bits & 1 != 0, x: bits & 2 != 0, q: bits & 4 != 0, derr: bits & 8 != 0 }
+    }
+}
+
+/// A serial-highway message.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum Message {
+    /// Driver → crate: run CAMAC function F at station N, subaddress A.
+    Command {
+        /// Crate address, 0–63 (1–62 address a crate).
+        crate_address: u8,
+        /// Station number N, 0–31.
+        station: u8,
+        /// Subaddress A, 0–15.
+        subaddress: u8,
+        /// Function F, 0–31.
+        function: u8,
+        /// The 24-bit write data: present exactly for F16–F23.
+        data: Option<u32>,
+    },
+    /// Crate → driver: the answer to a command.
+    Reply {
+        /// The answering crate.
+        crate_address: u8,
+        /// ERR, SX, SQ, DERR.
+        status: Status,
+        /// The 24-bit read data (replies to F0–F7).
+        data: Option<u32>,
+    },
+    /// Crate → driver, unasked: graded LAM requests.
+    Demand {
+        /// The demanding crate.
+        crate_address: u8,
+        /// The graded LAM (SGL), 5 bits.
+        sgl: u8,
+    },
+}
+
+/// Why a message could not be encoded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
+pub enum EncodeError {
+    /// The crate address does not fit six bits (0–63).
+    CrateAddress(u8),
+    /// The station number does not fit five bits (0–31).
+    Station(u8),
+    /// The subaddress does not fit four bits (0–15).
+    Subaddress(u8),
+    /// The function does not fit five bits (0–31).
+    Function(u8),
+    /// The SGL does not fit five bits (0–31).
+    Sgl(u8),
+    /// Data does not fit 24 bits.
+    Data(u32),
+    /// A write function (F16–F23) without data, or data with any other function.
+    DataPresence {
+        /// The function.
+        function: u8,
+        /// Whether data was given.
+        has_data: bool,
+    },
+    /// The output buffer is shorter than the encoded message.
+    BufferTooShort {
+        /// Bytes needed.
+        needed: usize,
+    },
+}
+
+impl fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::CrateAddress(v) => write!(f, "crate address must be 0..=63, got {v}"),
+            Self::Station(v) => write!(f, "station number must be 0..=31, got {v}"),
+            Self::Subaddress(v) => write!(f, "subaddress must be 0..=15, got {v}"),
+            Self::Function(v) => write!(f, "function must be 0..=31, got {v}"),
+            Self::Sgl(v) => write!(f, "SGL must be 0..=31, got {v}"),
+            Self::Data(v) => write!(f, "data must fit 24 bits, got {v:#x}"),
+            Self::DataPresence { function, has_data: true } => {
+                write!(f, "F{function} carries no write data, but data was given")
+            }
+            Self::DataPresence { function, has_data: false } => {
+                write!(f, "F{function} is a write (F16-F23) and needs data")
+            }
+            Self::BufferTooShort { needed } => write!(f, "output buffer too short: {needed} bytes needed"),
+        }
+    }
+}
+
+impl core::error::Error for EncodeError {}
+
+/// Which rule a received byte sequence broke.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
+pub enum DecodeError {
+    /// Fewer than two bytes: not even a header and a delimiter.
+    TooShort {
+        /// Bytes given.
+        len: usize,
+    },
+    /// More bytes than any message has (a command's SPACE run is limited to 64).
+    TooLong {
+        /// Bytes given.
+        len: usize,
+    },
+    /// The byte at `index` has even row parity.
+    RowParity {
+        /// Position from the header (0).
+        index: usize,
+    },
+    /// A delimiter bit in the wrong place: set in a header or text byte, or clear in the last.
+    Delimiter {
+        /// Position from the header (0).
+        index: usize,
+    },
+    /// Header + END: a truncated command or a short reply.
+    Truncated {
+        /// The header's crate address.
+        crate_address: u8,
+    },
+    /// A bit the layout fixes has the wrong value (SN bit 6 must be 1, SF bit 6 must be 0).
+    ReservedBit {
+        /// Position from the header (0).
+        index: usize,
+    },
+    /// The message is not as long as its type and function say.
+    Length {
+        /// Bytes expected (for a command: the least).
+        expected: usize,
+        /// Bytes given.
+        got: usize,
+    },
+    /// The column sums do not cancel: SUM or ENDSUM at `index` is wrong for the bytes before it.
+    ColumnParity {
+        /// Position of the SUM or ENDSUM byte.
+        index: usize,
+    },
+    /// A command byte between SUM and END is not SPACE.
+    NotSpace {
+        /// Position from the header (0).
+        index: usize,
+    },
+    /// A command's last byte is a delimiter but not END.
+    NotEnd {
+        /// The byte.
+        byte: u8,
+    },
+}
+
+impl fmt::Display for DecodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::TooShort { len } => write!(f, "{len} bytes: a message has at least a header and a delimiter"),
+            Self::TooLong { len } => write!(f, "{len} bytes: longer than any message"),
+            Self::RowParity { index } => write!(f, "row parity: byte {index} has an even number of ones"),
+            Self::Delimiter { index } => write!(f, "delimiter bit (bit 7) wrong in byte {index}"),
+            Self::Truncated { crate_address } => {
+                write!(f, "header + END only (truncated command or short reply) from crate {crate_address}")
+            }
+            Self::ReservedBit { index } => write!(f, "byte {index} has a fixed bit with the wrong value"),
+            Self::Length { expected, got } => write!(f, "length {got}, the message type needs {expected}"),
+            Self::ColumnParity { index } => write!(f, "column parity: the sum byte {index} does not cancel the columns"),
+            Self::NotSpace { index } => write!(f, "byte {index} of a command's reply room is not SPACE"),
+            Self::NotEnd { byte } => write!(f, "a command must end with END, got {byte:#04x}"),
+        }
+    }
+}
+
+impl core::error::Error for DecodeError {}
+
+/// Column sum (XOR of bits 1–6) of `bytes`.
+#[must_use]
+pub fn column_sum(bytes: &[u8]) -> u8 {
+    bytes.iter().fold(0, |acc, b| acc ^ (b & COLUMNS))
+}
+
+/// The SUM byte closing the text `bytes`.
+#[must_use]
+pub fn sum_byte(bytes: &[u8]) -> u8 {
+    with_parity(column_sum(bytes))
+}
+
+/// The ENDSUM byte closing the text `bytes`.
+#[must_use]
+pub fn endsum_byte(bytes: &[u8]) -> u8 {
+    with_parity(DELIMITER | column_sum(bytes))
+}
+
+/// The four data bytes of a 24-bit word, most significant six bits first.
+#[must_use]
+pub const fn data_bytes(word: u32) -> [u8; 4] {
+    [
+        with_parity(((word >> 18) & 0x3F) as u8),
+        with_parity(((word >> 12) & 0x3F) as u8),
+        with_parity(((word >> 6) & 0x3F) as u8),
+        with_parity((word & 0x3F) as u8),
+    ]
+}
+
+fn data_word(bytes: &[u8]) -> u32 {
+    bytes.iter().fold(0, |acc, b| (acc << 6) | u32::from(b & COLUMNS))
+}
+
+/// A cursor writing into the caller's buffer.
+struct Out<'a> {
+    buf: &'a mut [u8],
+    len: usize,
+}
+
+impl Out<'_> {
+    fn push(&mut self, byte: u8) {
+        if let Some(slot) = self.buf.get_mut(self.len) {
+            *slot = byte;
+        }
+        self.len = self.len.saturating_add(1);
+    }
+
+    fn text(&self) -> &[u8] {
+        self.buf.get(..self.len).unwrap_or(&[])
+    }
+}
+
+impl Message {
+    /// The crate address in the header.
+    #[must_use]
+    pub const fn crate_address(&self) -> u8 {
+        match *self {
+            Self::Command { crate_address, .. }
+            | Self::Reply { crate_address, .. }
+            | Self::Demand { crate_address, .. } => crate_address,
+        }
+    }
+
+    /// The length of the encoded message.
+    #[must_use]
+    pub const fn encoded_len(&self) -> usize {
+        match *self {
+            Self::Command { function, data, .. } => {
+                let data: usize = if data.is_some() { 4 } else { 0 };
+                // header, SA, SF, SN, data, SUM, SPACE × reply length, END
+                data.saturating_add(reply_len(function)).saturating_add(6)
+            }
+            Self::Reply { data: Some(_), .. } => 7,
+            Self::Reply { data: None, .. } | Self::Demand { .. } => 3,
+        }
+    }
+
+    /// Checks every field against its width and the data-presence rule.
+    ///
+    /// # Errors
+    /// The first field that does not fit, as [`EncodeError`].
+    pub const fn validate(&self) -> Result<(), EncodeError> {
+        let crate_address = self.crate_address();
+        if crate_address > 63 {
+            return Err(EncodeError::CrateAddress(crate_address));
+        }
+        let data = match *self {
+            Self::Command { station, subaddress, function, data, .. } => {
+                if station > 31 {
+                    return Err(EncodeError::Station(station));
+                }
+                if subaddress > 15 {
+                    return Err(EncodeError::Subaddress(subaddress));
+                }
+                if function > 31 {
+                    return Err(EncodeError::Function(function));
+                }
+                if is_write(function) != data.is_some() {
+                    return Err(EncodeError::DataPresence { function, has_data: data.is_some() });
+                }
+                data
+            }
+            Self::Reply { data, .. } => data,
+            Self::Demand { sgl, .. } => {
+                if sgl > 31 {
+                    return Err(EncodeError::Sgl(sgl));
+                }
+                None
+            }
+        };
+        if let Some(word) = data {
+            if word >= 1 << 24 {
+                return Err(EncodeError::Data(word));
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the message into `out` and returns its length.
+    ///
+    /// ```
+    /// use regler_panel_link::highway::{decode, Message, MAX_MESSAGE};
+    ///
+    /// let read = Message::Command { crate_address: 5, station: 3, subaddress: 0, function: 0, data: None };
+    /// let mut buf = [0u8; MAX_MESSAGE];
+    /// let len = read.encode(&mut buf)?;
+    /// assert_eq!(len, 13); // 5 text bytes + SUM, 7 SPACE for the 7-byte reply, END
+    /// assert_eq!(decode(&buf[..len]), Ok(read));
+    /// # Ok::<(), Box<dyn core::error::Error>>(())
+    /// ```
+    ///
+    /// # Errors
+    /// A field that does not fit ([`validate`](Self::validate)) or a buffer too short; `out` is
+    /// left untouched then.
+    pub fn encode(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
+        self.validate()?;
+        let needed = self.encoded_len();
+        if out.len() < needed {
+            return Err(EncodeError::BufferTooShort { needed });
+        }
+        let mut w = Out { buf: out, len: 0 };
+        w.push(with_parity(self.crate_address()));
+        match *self {
+            Self::Command { station, subaddress, function, data, .. } => {
+                w.push(with_parity(subaddress));
+                w.push(with_parity(function));
+                w.push(with_parity(STATION_MARK | station));
+                if let Some(word) = data {
+                    for byte in data_bytes(word) {
+                        w.push(byte);
+                    }
+                }
+                w.push(sum_byte(w.text()));
+                for _ in 0..reply_len(function) {
+                    w.push(SPACE);
+                }
+                w.push(END);
+            }
+            Self::Reply { status, data, .. } => {
+                w.push(with_parity(M1 | status.bits()));
+                if let Some(word) = data {
+                    for byte in data_bytes(word) {
+                        w.push(byte);
+                    }
+                }
+                w.push(endsum_byte(w.text()));
+            }
+            Self::Demand { sgl, .. } => {
+                w.push(with_parity(M2 | sgl));
+                w.push(endsum_byte(w.text()));
+            }
+        }
+        Ok(w.len)
+    }
+}
+
+/// The longest byte sequence [`decode`] considers (a command with 64 SPACE bytes).
+pub const MAX_DECODE: usize = 9 + 1 + 64 + 1;
+
+/// Decodes one message, from its header to its END or ENDSUM byte inclusive, checking every rule:
+/// length, row parity of every byte, the delimiter bit of every byte, the fixed bits, the layout
+/// of the message type, the column sum, the SPACE run and the END byte.
+///
+/// ```
+/// use regler_panel_link::highway::{decode, DecodeError, Message, Status};
+///
+/// let reply = Message::Reply { crate_address: 5, status: Status { x: true, q: true, ..Status::default() }, data: Some(0xABCDE) };
+/// let mut buf = [0u8; 7];
+/// reply.encode(&mut buf)?;
+/// assert_eq!(decode(&buf), Ok(reply));
+/// buf[3] ^= 0b0000_0011; // two flips in one byte: row parity holds, two columns do not
+/// assert_eq!(decode(&buf), Err(DecodeError::ColumnParity { index: 6 }));
+/// # Ok::<(), Box<dyn core::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// The first broken rule, as [`DecodeError`], in the order listed above.
+pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
+    let len = bytes.len();
+    if len < 2 {
+        return Err(DecodeError::TooShort { len });
+    }
+    if len > MAX_DECODE {
+        return Err(DecodeError::TooLong { len });
+    }
+    if let Some(index) = bytes.iter().position(|&b| !row_parity_ok(b)) {
+        return Err(DecodeError::RowParity { index });
+    }
+    let last = len.saturating_sub(1);
+    // Text bytes: delimiter bit clear. Where the text ends depends on the type, so first find the
+    // first delimiter: it must be the last byte.
+    if let Some(index) = bytes.iter().position(|&b| is_delimiter(b)) {
+        if index != last {
+            return Err(DecodeError::Delimiter { index });
+        }
+    } else {
+        return Err(DecodeError::Delimiter { index: last });
+    }
+    let field = |index: usize| bytes.get(index).map_or(0, |b| b & COLUMNS);
+    let crate_address = field(0);
+    if len == 2 {
+        return Err(DecodeError::Truncated { crate_address });
+    }
+    let second = field(1);
+    if second & M2 != 0 {
+        if len != 3 {
+            return Err(DecodeError::Length { expected: 3, got: len });
+        }
+        check_sum(bytes, 2)?;
+        return Ok(Message::Demand { crate_address, sgl: second & 0x1F });
+    }
+    if second & M1 != 0 {
+        let data = match len {
+            3 => None,
+            7 => Some(data_word(bytes.get(2..6).unwrap_or(&[]))),
+            _ => return Err(DecodeError::Length { expected: if len < 7 { 3 } else { 7 }, got: len }),
+        };
+        check_sum(bytes, last)?;
+        return Ok(Message::Reply { crate_address, status: Status::from_bits(second), data });
+    }
+    // A command: header, SA, SF, SN, [data], SUM, SPACE…, END.
+    let subaddress = second & 0x0F;
+    let sf = field(2);
+    let sn = field(3);
+    if len < 9 {
+        return Err(DecodeError::Length { expected: 9, got: len });
+    }
+    if sf & 0x20 != 0 {
+        return Err(DecodeError::ReservedBit { index: 2 });
+    }
+    if sn & STATION_MARK == 0 {
+        return Err(DecodeError::ReservedBit { index: 3 });
+    }
+    let function = sf & 0x1F;
+    let data_len = if is_write(function) { 4 } else { 0 };
+    let sum_at = 4usize.saturating_add(data_len);
+    let expected = sum_at.saturating_add(1).saturating_add(reply_len(function)).saturating_add(1);
+    if len < expected {
+        return Err(DecodeError::Length { expected, got: len });
+    }
+    check_sum(bytes, sum_at)?;
+    let room = bytes.get(sum_at.saturating_add(1)..last).unwrap_or(&[]);
+    if let Some(k) = room.iter().position(|&b| b != SPACE) {
+        return Err(DecodeError::NotSpace { index: sum_at.saturating_add(1).saturating_add(k) });
+    }
+    let end = bytes.get(last).copied().unwrap_or(0);
+    if end != END {
+        return Err(DecodeError::NotEnd { byte: end });
+    }
+    let data = if data_len == 4 { Some(data_word(bytes.get(4..8).unwrap_or(&[]))) } else { None };
+    Ok(Message::Command { crate_address, station: sn & 0x1F, subaddress, function, data })
+}
+
+/// Checks that the XOR of bits 1–6 over `bytes[..=at]` is zero.
+fn check_sum(bytes: &[u8], at: usize) -> Result<(), DecodeError> {
+    let covered = bytes.get(..=at).unwrap_or(&[]);
+    if column_sum(covered) == 0 { Ok(()) } else { Err(DecodeError::ColumnParity { index: at }) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn byte_constants_have_the_sources_bits() {
+        // SPACE: first six bits 1, delimiter 0, odd parity.
+        assert_eq!(SPACE & COLUMNS, 0x3F);
+        assert!(!is_delimiter(SPACE) && row_parity_ok(SPACE));
+        // END and WAIT: first five bits 0, last three 1.
+        assert_eq!(END, 0b1110_0000);
+        assert!(is_delimiter(END) && row_parity_ok(END));
+    }
+
+    #[test]
+    fn every_byte_of_every_message_has_odd_parity_and_one_delimiter_at_the_end() {
+        let messages = [
+            Message::Command { crate_address: 62, station: 31, subaddress: 15, function: 16, data: Some(0xFF_FFFF) },
+            Message::Command { crate_address: 1, station: 0, subaddress: 0, function: 0, data: None },
+            Message::Command { crate_address: 1, station: 1, subaddress: 2, function: 9, data: None },
+            Message::Reply { crate_address: 7, status: Status::from_bits(0xF), data: Some(0) },
+            Message::Reply { crate_address: 7, status: Status::default(), data: None },
+            Message::Demand { crate_address: 9, sgl: 31 },
+        ];
+        for m in messages {
+            let mut buf = [0u8; MAX_MESSAGE];
+            let len = m.encode(&mut buf).unwrap();
+            assert_eq!(len, m.encoded_len());
+            let bytes = &buf[..len];
+            assert!(bytes.iter().all(|&b| row_parity_ok(b)));
+            assert_eq!(bytes.iter().filter(|&&b| is_delimiter(b)).count(), 1);
+            assert!(is_delimiter(bytes[len - 1]));
+            assert_eq!(decode(bytes), Ok(m));
+        }
+    }
+
+    #[test]
+    fn encode_refuses_fields_that_do_not_fit_and_leaves_the_buffer_alone() {
+        let cmd = |crate_address, station, subaddress, function, data| Message::Command {
+            crate_address,
+            station,
+            subaddress,
+            function,
+            data,
+        };
+        let mut buf = [0x55u8; MAX_MESSAGE];
+        assert_eq!(cmd(64, 0, 0, 0, None).encode(&mut buf), Err(EncodeError::CrateAddress(64)));
+        assert_eq!(cmd(1, 32, 0, 0, None).encode(&mut buf), Err(EncodeError::Station(32)));
+        assert_eq!(cmd(1, 0, 16, 0, None).encode(&mut buf), Err(EncodeError::Subaddress(16)));
+        assert_eq!(cmd(1, 0, 0, 32, None).encode(&mut buf), Err(EncodeError::Function(32)));
+        assert_eq!(
+            cmd(1, 0, 0, 16, None).encode(&mut buf),
+            Err(EncodeError::DataPresence { function: 16, has_data: false })
+        );
+        assert_eq!(
+            cmd(1, 0, 0, 0, Some(1)).encode(&mut buf),
+            Err(EncodeError::DataPresence { function: 0, has_data: true })
+        );
+        assert_eq!(cmd(1, 0, 0, 16, Some(1 << 24)).encode(&mut buf), Err(EncodeError::Data(1 << 24)));
+        assert_eq!(Message::Demand { crate_address: 1, sgl: 32 }.encode(&mut buf), Err(EncodeError::Sgl(32)));
+        assert_eq!(
+            cmd(1, 0, 0, 16, Some(1)).encode(&mut buf[..12]),
+            Err(EncodeError::BufferTooShort { needed: 13 })
+        );
+        assert!(buf.iter().all(|&b| b == 0x55));
+        for text in [EncodeError::Station(32).to_string(), DecodeError::RowParity { index: 3 }.to_string()] {
+            assert!(text.contains("32") || text.contains('3'), "{text}");
+        }
+    }
+
+    #[test]
+    fn decode_names_the_rule() {
+        let mut buf = [0u8; MAX_MESSAGE];
+        let cmd = Message::Command { crate_address: 4, station: 2, subaddress: 1, function: 9, data: None };
+        let len = cmd.encode(&mut buf).unwrap();
+        assert_eq!(len, 9);
+        assert_eq!(decode(&[]), Err(DecodeError::TooShort { len: 0 }));
+        assert_eq!(decode(&[with_parity(4), END]), Err(DecodeError::Truncated { crate_address: 4 }));
+        // One SPACE short of the reply.
+        let short = [&buf[..5], &[SPACE, SPACE, END]].concat();
+        assert_eq!(decode(&short), Err(DecodeError::Length { expected: 9, got: 8 }));
+        // Extra SPACE is fine (the driver may give more room than needed).
+        let long = [&buf[..5], &[SPACE; 5], &[END]].concat();
+        assert_eq!(decode(&long), Ok(cmd));
+        // A delimiter in the text.
+        let mut bad = buf;
+        bad[2] = with_parity(DELIMITER | 9);
+        assert_eq!(decode(&bad[..len]), Err(DecodeError::Delimiter { index: 2 }));
+        // SN without its bit 6.
+        let mut bad = buf;
+        bad[3] = with_parity(2);
+        assert_eq!(decode(&bad[..len]), Err(DecodeError::ReservedBit { index: 3 }));
+        // ENDSUM where END belongs.
+        let mut bad = buf;
+        bad[8] = with_parity(DELIMITER | 1);
+        assert_eq!(decode(&bad[..len]), Err(DecodeError::NotEnd { byte: bad[8] }));
+        // A reply of the wrong length.
+        assert_eq!(
+            decode(&[with_parity(4), with_parity(M1), with_parity(1), endsum_byte(&[4, M1, 1])]),
+            Err(DecodeError::Length { expected: 3, got: 4 })
+        );
+    }
+}

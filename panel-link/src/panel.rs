@@ -1,0 +1,597 @@
+//! The 1977 operator-panel link (source 000): the computer refreshes each panel's registers
+//! with an endless byte sequence and takes key presses over a MOT/SÄN handshake.
+//!
+//! # On the wire
+//! A sequence is the **reset byte** [`RESET`] (`0xFF`) followed by one byte per register, in
+//! register order; the panel's counter, zeroed by the reset byte, says which register a byte goes
+//! to. **Register bytes carry 7 bits** (0–127, bit 8 always 0), so no register value can be taken
+//! for the reset byte, which is the only byte with bit 8 set; [`Host::set`] refuses a value above
+//! 127 ([`RegisterError::Value`]). On the line each byte is framed with a start bit, 8 data bits,
+//! a parity bit and a stop bit ([`crate::line::Framing::PANEL`]); a byte that arrives with a
+//! framing or parity error still moves the counter on, so the registers after it land in their
+//! own places and only the damaged one keeps its old value until the next sequence.
+//!
+//! # The key handshake
+//! - The panel has a key: it raises **MOT**.
+//! - The host looks at MOT every **10 ms** ([`Host::poll_mot`]); seeing it, it stops the
+//!   sequence, raises **SÄN** and listens.
+//! - While SÄN is up the panel sends the key byte at once and again every **20 ms**
+//!   ([`Panel::tick_20ms`]).
+//! - Two **consecutive identical** clean bytes are the key ([`HostEvent::Key`]); the host drops
+//!   SÄN. A damaged byte in between starts the pair again, so a key is never altered by one
+//!   damaged byte and, because the host ignores the line until MOT has dropped, never delivered
+//!   twice.
+//! - SÄN dropped: the panel drops MOT (for two of its 20 ms ticks, so the host sees it) and
+//!   forgets the key; the host waits for MOT low and restarts with a fresh sequence.
+//!
+//! Beyond the source: the host gives up on a key after [`HostConfig::key_timeout_polls`] polls
+//! ([`HostEvent::KeyTimedOut`]) and on a MOT line that never drops after
+//! [`HostConfig::mot_stuck_polls`] ([`HostEvent::MotStuck`]: it goes back to refreshing and
+//! ignores MOT until it has seen it low), so a dead panel cannot stop the displays.
+
+use core::fmt;
+
+use heapless::Deque;
+
+use crate::line::LineError;
+
+/// The reset byte: zeroes the panel's register counter. The only byte with bit 8 set.
+pub const RESET: u8 = 0xFF;
+/// The largest register value (7 bits).
+pub const MAX_VALUE: u8 = 0x7F;
+/// Registers of a loading desk.
+pub const LOADING_DESK: usize = 7;
+/// Registers of panel A or B.
+pub const LANE_PANEL: usize = 29;
+/// Registers of the central desk.
+pub const CENTRAL_DESK: usize = 46;
+/// Keys a panel holds while the host has not taken them.
+pub const KEY_QUEUE: usize = 8;
+
+/// Why a register could not be set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum RegisterError {
+    /// No such register.
+    Index {
+        /// The index asked for.
+        index: usize,
+        /// How many registers there are.
+        registers: usize,
+    },
+    /// The value does not fit 7 bits: it could be taken for the reset byte.
+    Value(u8),
+}
+
+impl fmt::Display for RegisterError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Index { index, registers } => {
+                write!(f, "register {index} does not exist (the panel has {registers})")
+            }
+            Self::Value(v) => write!(f, "register values are 0..=127 (7 bits), got {v}"),
+        }
+    }
+}
+
+impl core::error::Error for RegisterError {}
+
+/// Why a host configuration was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// `key_timeout_polls` must be at least 1.
+    KeyTimeout,
+    /// `mot_stuck_polls` must be at least 1.
+    MotStuck,
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::KeyTimeout => f.write_str("key_timeout_polls must be at least 1"),
+            Self::MotStuck => f.write_str("mot_stuck_polls must be at least 1"),
+        }
+    }
+}
+
+impl core::error::Error for ConfigError {}
+
+/// How long the host waits, in MOT polls (10 ms each).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct HostConfig {
+    /// Polls with SÄN up without two equal bytes before the key is given up (default 10 =
+    /// 100 ms: five repeats of the key).
+    pub key_timeout_polls: u16,
+    /// Polls waiting for MOT to drop before the host refreshes again regardless (default 100).
+    pub mot_stuck_polls: u16,
+}
+
+impl Default for HostConfig {
+    fn default() -> Self {
+        Self { key_timeout_polls: 10, mot_stuck_polls: 100 }
+    }
+}
+
+/// What the host reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum HostEvent {
+    /// A key arrived (two identical clean bytes in a row).
+    Key(u8),
+    /// SÄN was up for the whole key time-out without two identical bytes; the key is lost.
+    KeyTimedOut,
+    /// MOT did not drop after SÄN did; the host refreshes again and ignores MOT until it drops.
+    MotStuck,
+}
+
+/// The host's counters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct HostStats {
+    /// Complete sequences sent.
+    pub sequences: u64,
+    /// Keys delivered.
+    pub keys: u64,
+    /// Bytes received with a line error while listening.
+    pub line_errors: u64,
+    /// Keys given up.
+    pub key_timeouts: u64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+enum HostState {
+    /// Sending; `next` = 0 is the reset byte, k the register k − 1.
+    Sending { next: usize },
+    /// SÄN up, listening.
+    AwaitKey { polls: u16, last: Option<u8> },
+    /// SÄN dropped, waiting for MOT to drop.
+    AwaitMotLow { polls: u16 },
+}
+
+/// The computer's side of one panel's link, with `R` registers (7, 29 or 46 in the source).
+///
+/// ```
+/// use regler_panel_link::panel::{Host, HostConfig, Panel, RESET};
+///
+/// let mut host: Host<7> = Host::new(HostConfig::default())?;
+/// let mut panel: Panel<7> = Panel::new();
+/// host.set(2, 99)?;
+/// for _ in 0..8 {
+///     let byte = host.next_byte().unwrap_or(RESET);
+///     panel.receive(Ok(byte));
+/// }
+/// assert_eq!(panel.registers()[2], 99);
+/// # Ok::<(), Box<dyn core::error::Error>>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct Host<const R: usize> {
+    config: HostConfig,
+    registers: [u8; R],
+    /// The registers as they were when the current sequence began.
+    sending: [u8; R],
+    state: HostState,
+    ignore_mot: bool,
+    stats: HostStats,
+}
+
+impl<const R: usize> Host<R> {
+    /// A host with every register 0, about to send a reset byte.
+    ///
+    /// # Errors
+    /// A time-out of 0 polls.
+    pub const fn new(config: HostConfig) -> Result<Self, ConfigError> {
+        const { assert!(R > 0, "a panel has at least one register") };
+        if config.key_timeout_polls == 0 {
+            return Err(ConfigError::KeyTimeout);
+        }
+        if config.mot_stuck_polls == 0 {
+            return Err(ConfigError::MotStuck);
+        }
+        Ok(Self {
+            config,
+            registers: [0; R],
+            sending: [0; R],
+            state: HostState::Sending { next: 0 },
+            ignore_mot: false,
+            stats: HostStats { sequences: 0, keys: 0, line_errors: 0, key_timeouts: 0 },
+        })
+    }
+
+    /// Sets register `index` to `value`; it goes out from the next sequence on.
+    ///
+    /// # Errors
+    /// [`RegisterError`]: no such register, or a value above 127; nothing changes then.
+    pub fn set(&mut self, index: usize, value: u8) -> Result<(), RegisterError> {
+        if value > MAX_VALUE {
+            return Err(RegisterError::Value(value));
+        }
+        let slot = self.registers.get_mut(index).ok_or(RegisterError::Index { index, registers: R })?;
+        *slot = value;
+        Ok(())
+    }
+
+    /// The registers as the application last set them.
+    #[must_use]
+    pub const fn registers(&self) -> &[u8; R] {
+        &self.registers
+    }
+
+    /// The SÄN line.
+    #[must_use]
+    pub const fn san(&self) -> bool {
+        matches!(self.state, HostState::AwaitKey { .. })
+    }
+
+    /// The counters.
+    #[must_use]
+    pub const fn stats(&self) -> &HostStats {
+        &self.stats
+    }
+
+    /// The transmitter is ready: the next byte of the sequence, or `None` while the host is not
+    /// sending (SÄN up, or waiting for MOT to drop).
+    pub fn next_byte(&mut self) -> Option<u8> {
+        let HostState::Sending { next } = self.state else {
+            return None;
+        };
+        let byte = if next == 0 {
+            self.sending = self.registers;
+            RESET
+        } else {
+            self.sending.get(next.saturating_sub(1)).copied().unwrap_or(RESET)
+        };
+        let next = if next >= R {
+            self.stats.sequences = self.stats.sequences.saturating_add(1);
+            0
+        } else {
+            next.saturating_add(1)
+        };
+        self.state = HostState::Sending { next };
+        Some(byte)
+    }
+
+    /// The 10 ms MOT poll, with the MOT line's state.
+    pub fn poll_mot(&mut self, mot: bool) -> Option<HostEvent> {
+        if !mot {
+            self.ignore_mot = false;
+        }
+        match self.state {
+            HostState::Sending { .. } => {
+                if mot && !self.ignore_mot {
+                    self.state = HostState::AwaitKey { polls: 0, last: None };
+                }
+                None
+            }
+            HostState::AwaitKey { polls, last } => {
+                let polls = polls.saturating_add(1);
+                if polls >= self.config.key_timeout_polls {
+                    self.stats.key_timeouts = self.stats.key_timeouts.saturating_add(1);
+                    self.state = HostState::AwaitMotLow { polls: 0 };
+                    return Some(HostEvent::KeyTimedOut);
+                }
+                self.state = HostState::AwaitKey { polls, last };
+                None
+            }
+            HostState::AwaitMotLow { polls } => {
+                if !mot {
+                    self.state = HostState::Sending { next: 0 };
+                    return None;
+                }
+                let polls = polls.saturating_add(1);
+                if polls >= self.config.mot_stuck_polls {
+                    self.ignore_mot = true;
+                    self.state = HostState::Sending { next: 0 };
+                    return Some(HostEvent::MotStuck);
+                }
+                self.state = HostState::AwaitMotLow { polls };
+                None
+            }
+        }
+    }
+
+    /// A byte (or a line error) arrived from the panel.
+    pub fn receive(&mut self, byte: Result<u8, LineError>) -> Option<HostEvent> {
+        let HostState::AwaitKey { polls, last } = self.state else {
+            return None; // not listening: late repeats and noise are ignored
+        };
+        match byte {
+            Err(_) => {
+                self.stats.line_errors = self.stats.line_errors.saturating_add(1);
+                self.state = HostState::AwaitKey { polls, last: None };
+                None
+            }
+            Ok(key) if last == Some(key) => {
+                self.stats.keys = self.stats.keys.saturating_add(1);
+                self.state = HostState::AwaitMotLow { polls: 0 };
+                Some(HostEvent::Key(key))
+            }
+            Ok(key) => {
+                self.state = HostState::AwaitKey { polls, last: Some(key) };
+                None
+            }
+        }
+    }
+}
+
+/// Why a key press was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum PanelError {
+    /// [`KEY_QUEUE`] keys are already waiting; this one is handed back.
+    QueueFull(u8),
+}
+
+impl fmt::Display for PanelError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::QueueFull(key) => write!(f, "key {key:#04x} refused: {KEY_QUEUE} keys are already waiting"),
+        }
+    }
+}
+
+impl core::error::Error for PanelError {}
+
+/// The panel's counters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct PanelStats {
+    /// Reset bytes received.
+    pub resets: u64,
+    /// Register bytes latched.
+    pub latched: u64,
+    /// Bytes with a framing or parity error, or with bit 8 set but not the reset byte.
+    pub bad_bytes: u64,
+    /// Register bytes beyond the last register, or before the first reset (ignored).
+    pub overruns: u64,
+    /// Keys taken by the host.
+    pub keys_sent: u64,
+}
+
+/// The panel's side: counter, registers, key queue, MOT.
+///
+/// ```
+/// use regler_panel_link::panel::Panel;
+///
+/// let mut panel: Panel<29> = Panel::new();
+/// panel.press(0x41)?;
+/// assert!(panel.mot());
+/// assert_eq!(panel.set_san(true), Some(0x41)); // sent at once…
+/// assert_eq!(panel.tick_20ms(), Some(0x41));   // …and every 20 ms
+/// assert_eq!(panel.set_san(false), None);      // taken
+/// assert!(!panel.mot());
+/// # Ok::<(), regler_panel_link::panel::PanelError>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct Panel<const R: usize> {
+    registers: [u8; R],
+    /// The register the next byte goes to; `None` until the first reset byte.
+    counter: Option<usize>,
+    keys: Deque<u8, KEY_QUEUE>,
+    san: bool,
+    /// Ticks MOT stays low after a key was taken.
+    mot_low_ticks: u8,
+    stats: PanelStats,
+}
+
+impl<const R: usize> Default for Panel<R> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const R: usize> Panel<R> {
+    /// A panel with every register 0, waiting for its first reset byte.
+    #[must_use]
+    pub const fn new() -> Self {
+        const { assert!(R > 0, "a panel has at least one register") };
+        Self {
+            registers: [0; R],
+            counter: None,
+            keys: Deque::new(),
+            san: false,
+            mot_low_ticks: 0,
+            stats: PanelStats { resets: 0, latched: 0, bad_bytes: 0, overruns: 0, keys_sent: 0 },
+        }
+    }
+
+    /// The registers as latched.
+    #[must_use]
+    pub const fn registers(&self) -> &[u8; R] {
+        &self.registers
+    }
+
+    /// The counters.
+    #[must_use]
+    pub const fn stats(&self) -> &PanelStats {
+        &self.stats
+    }
+
+    /// A byte (or line error) from the host.
+    pub fn receive(&mut self, byte: Result<u8, LineError>) {
+        if byte == Ok(RESET) {
+            self.counter = Some(0);
+            self.stats.resets = self.stats.resets.saturating_add(1);
+            return;
+        }
+        let Some(at) = self.counter else {
+            self.stats.overruns = self.stats.overruns.saturating_add(1);
+            return;
+        };
+        self.counter = Some(at.saturating_add(1));
+        let value = match byte {
+            Ok(value) if value <= MAX_VALUE => value,
+            _ => {
+                // Damaged: keep the old value; the position still counts.
+                self.stats.bad_bytes = self.stats.bad_bytes.saturating_add(1);
+                return;
+            }
+        };
+        match self.registers.get_mut(at) {
+            Some(slot) => {
+                *slot = value;
+                self.stats.latched = self.stats.latched.saturating_add(1);
+            }
+            None => self.stats.overruns = self.stats.overruns.saturating_add(1),
+        }
+    }
+
+    /// The operator pressed a key.
+    ///
+    /// # Errors
+    /// [`PanelError::QueueFull`] with the key, when [`KEY_QUEUE`] keys are waiting.
+    pub fn press(&mut self, key: u8) -> Result<(), PanelError> {
+        self.keys.push_back(key).map_err(PanelError::QueueFull)
+    }
+
+    /// Keys waiting.
+    #[must_use]
+    pub fn keys_waiting(&self) -> usize {
+        self.keys.len()
+    }
+
+    /// The MOT line: a key is waiting (and the last key's MOT-low time is over).
+    #[must_use]
+    pub fn mot(&self) -> bool {
+        !self.keys.is_empty() && self.mot_low_ticks == 0
+    }
+
+    /// The SÄN line changed (or was sampled): on a rise, the key byte to send at once; on a
+    /// fall, the key counts as taken.
+    pub fn set_san(&mut self, san: bool) -> Option<u8> {
+        let was = core::mem::replace(&mut self.san, san);
+        match (was, san) {
+            (false, true) => self.keys.front().copied(),
+            (true, false) => {
+                if self.keys.pop_front().is_some() {
+                    self.stats.keys_sent = self.stats.keys_sent.saturating_add(1);
+                }
+                self.mot_low_ticks = 2;
+                None
+            }
+            _ => None,
+        }
+    }
+
+    /// The 20 ms tick: the key byte again while SÄN is up.
+    pub fn tick_20ms(&mut self) -> Option<u8> {
+        self.mot_low_ticks = self.mot_low_ticks.saturating_sub(1);
+        if self.san { self.keys.front().copied() } else { None }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn register_values_are_checked() {
+        let mut host: Host<7> = Host::new(HostConfig::default()).unwrap();
+        assert_eq!(host.set(7, 1), Err(RegisterError::Index { index: 7, registers: 7 }));
+        assert_eq!(host.set(0, 128), Err(RegisterError::Value(128)));
+        assert_eq!(host.set(0, RESET), Err(RegisterError::Value(RESET)));
+        assert_eq!(host.set(6, 127), Ok(()));
+        assert_eq!(host.registers(), &[0, 0, 0, 0, 0, 0, 127]);
+        assert!(Host::<7>::new(HostConfig { key_timeout_polls: 0, mot_stuck_polls: 1 }).is_err());
+        assert!(Host::<7>::new(HostConfig { key_timeout_polls: 1, mot_stuck_polls: 0 }).is_err());
+    }
+
+    #[test]
+    fn no_register_byte_is_the_reset_byte() {
+        for value in 0..=MAX_VALUE {
+            assert_ne!(value, RESET);
+            assert_eq!(value & 0x80, 0);
+        }
+    }
+
+    #[test]
+    fn a_sequence_never_mixes_two_updates() {
+        let mut host: Host<3> = Host::new(HostConfig::default()).unwrap();
+        host.set(0, 1).unwrap();
+        host.set(2, 1).unwrap();
+        assert_eq!(host.next_byte(), Some(RESET));
+        assert_eq!(host.next_byte(), Some(1));
+        host.set(2, 2).unwrap(); // mid-sequence: goes out next time
+        assert_eq!(host.next_byte(), Some(0));
+        assert_eq!(host.next_byte(), Some(1));
+        assert_eq!(host.next_byte(), Some(RESET));
+        assert_eq!(host.stats().sequences, 1);
+        assert_eq!([host.next_byte(), host.next_byte(), host.next_byte()], [Some(1), Some(0), Some(2)]);
+    }
+
+    #[test]
+    fn damaged_byte_keeps_its_place() {
+        let mut panel: Panel<3> = Panel::new();
+        panel.receive(Ok(5)); // before any reset: ignored
+        assert_eq!(panel.registers(), &[0, 0, 0]);
+        for b in [Ok(RESET), Ok(1), Err(LineError::Parity), Ok(3), Ok(9)] {
+            panel.receive(b);
+        }
+        assert_eq!(panel.registers(), &[1, 0, 3]);
+        assert_eq!(panel.stats().bad_bytes, 1);
+        assert_eq!(panel.stats().overruns, 2);
+    }
+
+    #[test]
+    fn handshake_delivers_one_key_and_restarts_with_a_reset() {
+        let mut host: Host<7> = Host::new(HostConfig::default()).unwrap();
+        let mut panel: Panel<7> = Panel::new();
+        host.next_byte();
+        host.next_byte();
+        panel.press(0x33).unwrap();
+        assert_eq!(host.poll_mot(panel.mot()), None);
+        assert!(host.san());
+        assert_eq!(host.next_byte(), None);
+        let first = panel.set_san(host.san()).unwrap();
+        assert_eq!(host.receive(Ok(first)), None);
+        let again = panel.tick_20ms().unwrap();
+        assert_eq!(host.receive(Err(LineError::Parity)), None); // noise between: pair restarts
+        assert_eq!(host.receive(Ok(again)), None);
+        let third = panel.tick_20ms().unwrap();
+        assert_eq!(host.receive(Ok(third)), Some(HostEvent::Key(0x33)));
+        assert!(!host.san());
+        assert_eq!(panel.set_san(false), None);
+        // A late repeat is ignored; MOT low lets the host send again, from the reset byte.
+        assert_eq!(host.receive(Ok(0x33)), None);
+        assert!(!panel.mot());
+        host.poll_mot(panel.mot());
+        assert_eq!(host.next_byte(), Some(RESET));
+        assert_eq!(host.stats().keys, 1);
+    }
+
+    #[test]
+    fn a_dead_panel_cannot_stop_the_displays() {
+        let mut host: Host<7> = Host::new(HostConfig { key_timeout_polls: 3, mot_stuck_polls: 4 }).unwrap();
+        let mut events = Vec::new();
+        for _ in 0..20 {
+            events.extend(host.poll_mot(true));
+        }
+        assert_eq!(events, vec![HostEvent::KeyTimedOut, HostEvent::MotStuck]);
+        assert_eq!(host.next_byte(), Some(RESET));
+        // Still ignoring the stuck MOT until it drops once.
+        assert_eq!(host.poll_mot(true), None);
+        assert!(!host.san());
+        host.poll_mot(false);
+        host.poll_mot(true);
+        assert!(host.san());
+    }
+
+    #[test]
+    fn a_full_key_queue_hands_the_key_back() {
+        let mut panel: Panel<7> = Panel::new();
+        for k in 0..KEY_QUEUE as u8 {
+            panel.press(k).unwrap();
+        }
+        assert_eq!(panel.press(99), Err(PanelError::QueueFull(99)));
+        assert_eq!(panel.keys_waiting(), KEY_QUEUE);
+    }
+}
