@@ -140,7 +140,10 @@ pub fn clock_driver<P: Read + Write, const W: usize>(
 ///
 /// # Errors
 /// See [`write_byte`].
-pub fn host_transmit<P: Write, const R: usize>(port: &mut P, host: &mut Host<R>) -> Result<bool, IoError<P::Error>> {
+pub fn host_transmit<P: Write, const R: usize>(
+    port: &mut P,
+    host: &mut Host<R>,
+) -> Result<bool, IoError<P::Error>> {
     match host.next_byte() {
         Some(byte) => write_byte(port, byte).map(|()| true),
         None => Ok(false),
@@ -151,7 +154,10 @@ pub fn host_transmit<P: Write, const R: usize>(port: &mut P, host: &mut Host<R>)
 ///
 /// # Errors
 /// See [`read_byte`].
-pub fn panel_receive<P: Read, const R: usize>(port: &mut P, panel: &mut Panel<R>) -> Result<(), IoError<P::Error>> {
+pub fn panel_receive<P: Read, const R: usize>(
+    port: &mut P,
+    panel: &mut Panel<R>,
+) -> Result<(), IoError<P::Error>> {
     let byte = read_byte(port)?;
     panel.receive(Ok(byte));
     Ok(())

@@ -14,7 +14,7 @@
 )]
 
 pub mod highway;
-pub mod line;
-pub mod panel;
 #[cfg(feature = "embedded-io")]
 pub mod io;
+pub mod line;
+pub mod panel;

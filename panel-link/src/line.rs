@@ -157,7 +157,11 @@ impl BitReceiver {
     /// A receiver hunting for a start bit.
     #[must_use]
     pub const fn new(framing: Framing) -> Self {
-        Self { framing, frame: 0, have: 0 }
+        Self {
+            framing,
+            frame: 0,
+            have: 0,
+        }
     }
 
     /// Feed one bit; a whole frame gives its byte or its error, then the receiver hunts for the
@@ -200,7 +204,10 @@ pub enum NoiseError {
 impl fmt::Display for NoiseError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::Rate(rate) => write!(f, "bit-error rate must be finite and in 0..=0.5, got {rate}"),
+            Self::Rate(rate) => write!(
+                f,
+                "bit-error rate must be finite and in 0..=0.5, got {rate}"
+            ),
         }
     }
 }
@@ -247,7 +254,11 @@ impl Noise {
             all_kept *= keep;
             *slot = to_threshold(1.0 - all_kept);
         }
-        Ok(Self { state: seed, first, flips: 0 })
+        Ok(Self {
+            state: seed,
+            first,
+            flips: 0,
+        })
     }
 
     /// The next 64 random bits (SplitMix64).
@@ -309,7 +320,11 @@ mod tests {
 
     #[test]
     fn framing_round_trips_every_byte_and_catches_every_single_flip() {
-        for framing in [Framing::BIT_SERIAL, Framing::PANEL, Framing::new(Parity::Odd)] {
+        for framing in [
+            Framing::BIT_SERIAL,
+            Framing::PANEL,
+            Framing::new(Parity::Odd),
+        ] {
             for byte in 0..=255u8 {
                 let frame = framing.encode(byte);
                 assert_eq!(framing.decode(frame), Ok(byte));
@@ -358,7 +373,10 @@ mod tests {
             }
             let expected = rate * (n * 11) as f64;
             let sd = (expected * (1.0 - rate)).sqrt();
-            assert!((ones as f64 - expected).abs() <= 5.0 * sd + 1.0, "rate {rate}: {ones} vs {expected}");
+            assert!(
+                (ones as f64 - expected).abs() <= 5.0 * sd + 1.0,
+                "rate {rate}: {ones} vs {expected}"
+            );
             assert_eq!(a.flips(), ones);
         }
     }
@@ -374,7 +392,10 @@ mod tests {
             }
         }
         // 8000 expected per position.
-        assert!(per_bit.iter().all(|&c| (7500..8500).contains(&c)), "{per_bit:?}");
+        assert!(
+            per_bit.iter().all(|&c| (7500..8500).contains(&c)),
+            "{per_bit:?}"
+        );
     }
 
     #[test]

@@ -68,7 +68,10 @@ impl fmt::Display for RegisterError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             Self::Index { index, registers } => {
-                write!(f, "register {index} does not exist (the panel has {registers})")
+                write!(
+                    f,
+                    "register {index} does not exist (the panel has {registers})"
+                )
             }
             Self::Value(v) => write!(f, "register values are 0..=127 (7 bits), got {v}"),
         }
@@ -113,7 +116,10 @@ pub struct HostConfig {
 
 impl Default for HostConfig {
     fn default() -> Self {
-        Self { key_timeout_polls: 10, mot_stuck_polls: 100 }
+        Self {
+            key_timeout_polls: 10,
+            mot_stuck_polls: 100,
+        }
     }
 }
 
@@ -201,7 +207,12 @@ impl<const R: usize> Host<R> {
             sending: [0; R],
             state: HostState::Sending { next: 0 },
             ignore_mot: false,
-            stats: HostStats { sequences: 0, keys: 0, line_errors: 0, key_timeouts: 0 },
+            stats: HostStats {
+                sequences: 0,
+                keys: 0,
+                line_errors: 0,
+                key_timeouts: 0,
+            },
         })
     }
 
@@ -213,7 +224,10 @@ impl<const R: usize> Host<R> {
         if value > MAX_VALUE {
             return Err(RegisterError::Value(value));
         }
-        let slot = self.registers.get_mut(index).ok_or(RegisterError::Index { index, registers: R })?;
+        let slot = self.registers.get_mut(index).ok_or(RegisterError::Index {
+            index,
+            registers: R,
+        })?;
         *slot = value;
         Ok(())
     }
@@ -246,7 +260,10 @@ impl<const R: usize> Host<R> {
             self.sending = self.registers;
             RESET
         } else {
-            self.sending.get(next.saturating_sub(1)).copied().unwrap_or(RESET)
+            self.sending
+                .get(next.saturating_sub(1))
+                .copied()
+                .unwrap_or(RESET)
         };
         let next = if next >= R {
             self.stats.sequences = self.stats.sequences.saturating_add(1);
@@ -266,7 +283,10 @@ impl<const R: usize> Host<R> {
         match self.state {
             HostState::Sending { .. } => {
                 if mot && !self.ignore_mot {
-                    self.state = HostState::AwaitKey { polls: 0, last: None };
+                    self.state = HostState::AwaitKey {
+                        polls: 0,
+                        last: None,
+                    };
                 }
                 None
             }
@@ -314,7 +334,10 @@ impl<const R: usize> Host<R> {
                 Some(HostEvent::Key(key))
             }
             Ok(key) => {
-                self.state = HostState::AwaitKey { polls, last: Some(key) };
+                self.state = HostState::AwaitKey {
+                    polls,
+                    last: Some(key),
+                };
                 None
             }
         }
@@ -333,7 +356,10 @@ pub enum PanelError {
 impl fmt::Display for PanelError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::QueueFull(key) => write!(f, "key {key:#04x} refused: {KEY_QUEUE} keys are already waiting"),
+            Self::QueueFull(key) => write!(
+                f,
+                "key {key:#04x} refused: {KEY_QUEUE} keys are already waiting"
+            ),
         }
     }
 }
@@ -400,7 +426,13 @@ impl<const R: usize> Panel<R> {
             keys: Deque::new(),
             san: false,
             mot_low_ticks: 0,
-            stats: PanelStats { resets: 0, latched: 0, bad_bytes: 0, overruns: 0, keys_sent: 0 },
+            stats: PanelStats {
+                resets: 0,
+                latched: 0,
+                bad_bytes: 0,
+                overruns: 0,
+                keys_sent: 0,
+            },
         }
     }
 
@@ -485,7 +517,11 @@ impl<const R: usize> Panel<R> {
     /// The 20 ms tick: the key byte again while SÄN is up.
     pub fn tick_20ms(&mut self) -> Option<u8> {
         self.mot_low_ticks = self.mot_low_ticks.saturating_sub(1);
-        if self.san { self.keys.front().copied() } else { None }
+        if self.san {
+            self.keys.front().copied()
+        } else {
+            None
+        }
     }
 }
 
@@ -496,13 +532,31 @@ mod tests {
     #[test]
     fn register_values_are_checked() {
         let mut host: Host<7> = Host::new(HostConfig::default()).unwrap();
-        assert_eq!(host.set(7, 1), Err(RegisterError::Index { index: 7, registers: 7 }));
+        assert_eq!(
+            host.set(7, 1),
+            Err(RegisterError::Index {
+                index: 7,
+                registers: 7
+            })
+        );
         assert_eq!(host.set(0, 128), Err(RegisterError::Value(128)));
         assert_eq!(host.set(0, RESET), Err(RegisterError::Value(RESET)));
         assert_eq!(host.set(6, 127), Ok(()));
         assert_eq!(host.registers(), &[0, 0, 0, 0, 0, 0, 127]);
-        assert!(Host::<7>::new(HostConfig { key_timeout_polls: 0, mot_stuck_polls: 1 }).is_err());
-        assert!(Host::<7>::new(HostConfig { key_timeout_polls: 1, mot_stuck_polls: 0 }).is_err());
+        assert!(
+            Host::<7>::new(HostConfig {
+                key_timeout_polls: 0,
+                mot_stuck_polls: 1
+            })
+            .is_err()
+        );
+        assert!(
+            Host::<7>::new(HostConfig {
+                key_timeout_polls: 1,
+                mot_stuck_polls: 0
+            })
+            .is_err()
+        );
     }
 
     #[test]
@@ -525,7 +579,10 @@ mod tests {
         assert_eq!(host.next_byte(), Some(1));
         assert_eq!(host.next_byte(), Some(RESET));
         assert_eq!(host.stats().sequences, 1);
-        assert_eq!([host.next_byte(), host.next_byte(), host.next_byte()], [Some(1), Some(0), Some(2)]);
+        assert_eq!(
+            [host.next_byte(), host.next_byte(), host.next_byte()],
+            [Some(1), Some(0), Some(2)]
+        );
     }
 
     #[test]
@@ -570,7 +627,11 @@ mod tests {
 
     #[test]
     fn a_dead_panel_cannot_stop_the_displays() {
-        let mut host: Host<7> = Host::new(HostConfig { key_timeout_polls: 3, mot_stuck_polls: 4 }).unwrap();
+        let mut host: Host<7> = Host::new(HostConfig {
+            key_timeout_polls: 3,
+            mot_stuck_polls: 4,
+        })
+        .unwrap();
         let mut events = Vec::new();
         for _ in 0..20 {
             events.extend(host.poll_mot(true));

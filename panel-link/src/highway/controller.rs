@@ -47,7 +47,10 @@ pub struct ControllerConfig {
 
 impl Default for ControllerConfig {
     fn default() -> Self {
-        Self { address: 1, demand_repeat: 4096 }
+        Self {
+            address: 1,
+            demand_repeat: 4096,
+        }
     }
 }
 
@@ -262,7 +265,8 @@ impl Controller {
             self.last_sgl = 0;
             return None;
         }
-        let repeat = self.config.demand_repeat != 0 && self.since_demand >= self.config.demand_repeat;
+        let repeat =
+            self.config.demand_repeat != 0 && self.since_demand >= self.config.demand_repeat;
         if sgl != self.last_sgl || repeat {
             self.last_sgl = sgl;
             self.since_demand = 0;
@@ -341,7 +345,11 @@ impl Controller {
         if self.answered {
             // Reply room: the rest of the reply, then WAIT for any SPACE beyond it.
             if self.reply_sent < self.reply_len {
-                let byte = self.reply.get(usize::from(self.reply_sent)).copied().unwrap_or(WAIT);
+                let byte = self
+                    .reply
+                    .get(usize::from(self.reply_sent))
+                    .copied()
+                    .unwrap_or(WAIT);
                 self.reply_sent = self.reply_sent.saturating_add(1);
                 return byte;
             }
@@ -401,7 +409,11 @@ impl Controller {
             self.stats.errors = self.stats.errors.saturating_add(1);
         } else {
             self.stats.executed = self.stats.executed.saturating_add(1);
-            let write = if is_write(self.function) { Some(self.data) } else { None };
+            let write = if is_write(self.function) {
+                Some(self.data)
+            } else {
+                None
+            };
             let cycle = dataway.cycle(self.station, self.subaddress, self.function, write);
             status |= u8::from(cycle.x) << 1 | u8::from(cycle.q) << 2;
             if is_read(self.function) {
@@ -448,7 +460,11 @@ mod tests {
             if let Some(w) = write {
                 self.regs[reg] = w;
             }
-            Cycle { read: self.regs[reg], x: true, q: f < 8 }
+            Cycle {
+                read: self.regs[reg],
+                x: true,
+                q: f < 8,
+            }
         }
         fn graded_lam(&mut self) -> u8 {
             self.lam
@@ -456,7 +472,11 @@ mod tests {
     }
 
     fn run(c: &mut Controller, crate_: &mut Crate, input: &[u8]) -> Vec<u8> {
-        input.iter().chain(&[WAIT; 8]).map(|&b| c.clock(b, crate_)).collect()
+        input
+            .iter()
+            .chain(&[WAIT; 8])
+            .map(|&b| c.clock(b, crate_))
+            .collect()
     }
 
     fn encode(m: Message) -> Vec<u8> {
@@ -485,7 +505,11 @@ mod tests {
     fn config_is_checked() {
         for bad in [0, 63, 64, 255] {
             assert_eq!(
-                Controller::new(ControllerConfig { address: bad, demand_repeat: 0 }).err(),
+                Controller::new(ControllerConfig {
+                    address: bad,
+                    demand_repeat: 0
+                })
+                .err(),
                 Some(ConfigError::Address(bad))
             );
         }
@@ -493,20 +517,40 @@ mod tests {
 
     #[test]
     fn read_is_answered_over_the_spaces_with_one_byte_of_delay() {
-        let mut c = Controller::new(ControllerConfig { address: 7, demand_repeat: 0 }).unwrap();
-        let mut crate_ = Crate { regs: [0x12_3456, 0, 0, 0], ..Crate::default() };
-        let cmd = encode(Message::Command { crate_address: 7, station: 2, subaddress: 0, function: 0, data: None });
+        let mut c = Controller::new(ControllerConfig {
+            address: 7,
+            demand_repeat: 0,
+        })
+        .unwrap();
+        let mut crate_ = Crate {
+            regs: [0x12_3456, 0, 0, 0],
+            ..Crate::default()
+        };
+        let cmd = encode(Message::Command {
+            crate_address: 7,
+            station: 2,
+            subaddress: 0,
+            function: 0,
+            data: None,
+        });
         let out = run(&mut c, &mut crate_, &cmd);
         assert_eq!(out.len(), cmd.len() + 8);
         assert_eq!(out[0], WAIT);
         let found = messages(&out);
         assert_eq!(found.len(), 2, "{out:x?}");
-        assert_eq!(decode(&found[0]), Err(super::super::DecodeError::Truncated { crate_address: 7 }));
+        assert_eq!(
+            decode(&found[0]),
+            Err(super::super::DecodeError::Truncated { crate_address: 7 })
+        );
         assert_eq!(
             decode(&found[1]),
             Ok(Message::Reply {
                 crate_address: 7,
-                status: Status { x: true, q: true, ..Status::default() },
+                status: Status {
+                    x: true,
+                    q: true,
+                    ..Status::default()
+                },
                 data: Some(0x12_3456)
             })
         );
@@ -517,11 +561,28 @@ mod tests {
 
     #[test]
     fn other_crates_messages_pass_unchanged_one_byte_late() {
-        let mut c = Controller::new(ControllerConfig { address: 7, demand_repeat: 0 }).unwrap();
+        let mut c = Controller::new(ControllerConfig {
+            address: 7,
+            demand_repeat: 0,
+        })
+        .unwrap();
         let mut crate_ = Crate::default();
-        let mut stream = encode(Message::Command { crate_address: 8, station: 2, subaddress: 0, function: 16, data: Some(5) });
-        stream.extend(encode(Message::Reply { crate_address: 7, status: Status::default(), data: None }));
-        stream.extend(encode(Message::Demand { crate_address: 7, sgl: 3 }));
+        let mut stream = encode(Message::Command {
+            crate_address: 8,
+            station: 2,
+            subaddress: 0,
+            function: 16,
+            data: Some(5),
+        });
+        stream.extend(encode(Message::Reply {
+            crate_address: 7,
+            status: Status::default(),
+            data: None,
+        }));
+        stream.extend(encode(Message::Demand {
+            crate_address: 7,
+            sgl: 3,
+        }));
         let out = run(&mut c, &mut crate_, &stream);
         assert_eq!(&out[1..=stream.len()], &stream[..]);
         assert!(crate_.cycles.is_empty());
@@ -530,20 +591,57 @@ mod tests {
 
     #[test]
     fn a_corrupt_command_is_answered_with_err_and_not_run_then_derr() {
-        let mut c = Controller::new(ControllerConfig { address: 7, demand_repeat: 0 }).unwrap();
+        let mut c = Controller::new(ControllerConfig {
+            address: 7,
+            demand_repeat: 0,
+        })
+        .unwrap();
         let mut crate_ = Crate::default();
-        let mut cmd = encode(Message::Command { crate_address: 7, station: 2, subaddress: 1, function: 16, data: Some(77) });
+        let mut cmd = encode(Message::Command {
+            crate_address: 7,
+            station: 2,
+            subaddress: 1,
+            function: 16,
+            data: Some(77),
+        });
         cmd[5] ^= 0x03; // two column bits: row parity holds, the sum does not
         let out = run(&mut c, &mut crate_, &cmd);
         let found = messages(&out);
-        let err = Status { err: true, ..Status::default() };
-        assert_eq!(decode(&found[1]), Ok(Message::Reply { crate_address: 7, status: err, data: None }));
+        let err = Status {
+            err: true,
+            ..Status::default()
+        };
+        assert_eq!(
+            decode(&found[1]),
+            Ok(Message::Reply {
+                crate_address: 7,
+                status: err,
+                data: None
+            })
+        );
         assert!(crate_.cycles.is_empty());
         // The next, clean command runs and reports the earlier error as DERR.
-        let cmd = encode(Message::Command { crate_address: 7, station: 2, subaddress: 1, function: 16, data: Some(77) });
+        let cmd = encode(Message::Command {
+            crate_address: 7,
+            station: 2,
+            subaddress: 1,
+            function: 16,
+            data: Some(77),
+        });
         let found = messages(&run(&mut c, &mut crate_, &cmd));
-        let derr = Status { derr: true, x: true, ..Status::default() };
-        assert_eq!(decode(&found[1]), Ok(Message::Reply { crate_address: 7, status: derr, data: None }));
+        let derr = Status {
+            derr: true,
+            x: true,
+            ..Status::default()
+        };
+        assert_eq!(
+            decode(&found[1]),
+            Ok(Message::Reply {
+                crate_address: 7,
+                status: derr,
+                data: None
+            })
+        );
         assert_eq!(crate_.cycles, vec![(2, 1, 16, Some(77))]);
         assert_eq!(c.stats().errors, 1);
         assert_eq!(c.stats().executed, 1);
@@ -551,9 +649,17 @@ mod tests {
 
     #[test]
     fn demand_goes_out_between_messages_and_the_delay_shrinks_back() {
-        let mut c = Controller::new(ControllerConfig { address: 5, demand_repeat: 0 }).unwrap();
+        let mut c = Controller::new(ControllerConfig {
+            address: 5,
+            demand_repeat: 0,
+        })
+        .unwrap();
         let mut crate_ = Crate::default();
-        let passing = encode(Message::Reply { crate_address: 9, status: Status::default(), data: Some(1) });
+        let passing = encode(Message::Reply {
+            crate_address: 9,
+            status: Status::default(),
+            data: Some(1),
+        });
         let mut stream = passing.clone();
         stream.extend(&passing); // back to back: no gap
         crate_.lam = 0;
@@ -568,7 +674,13 @@ mod tests {
         let found = messages(&out);
         assert_eq!(found.len(), 3, "{out:x?}");
         assert_eq!(found[0], passing);
-        assert_eq!(decode(&found[1]), Ok(Message::Demand { crate_address: 5, sgl: 4 }));
+        assert_eq!(
+            decode(&found[1]),
+            Ok(Message::Demand {
+                crate_address: 5,
+                sgl: 4
+            })
+        );
         assert_eq!(found[2], passing);
         assert_eq!(c.held(), 0);
         assert_eq!(c.stats().demands, 1);

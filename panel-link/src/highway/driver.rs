@@ -28,7 +28,11 @@ pub struct DriverConfig {
 
 impl Default for DriverConfig {
     fn default() -> Self {
-        Self { timeout: 512, retries: 3, gap: 1 }
+        Self {
+            timeout: 512,
+            retries: 3,
+            gap: 1,
+        }
     }
 }
 
@@ -264,7 +268,9 @@ impl<const W: usize> Driver<W> {
     /// True when a command to `crate_address` is outstanding.
     #[must_use]
     pub fn busy(&self, crate_address: u8) -> bool {
-        self.slots.iter().any(|s| s.command.crate_address() == crate_address)
+        self.slots
+            .iter()
+            .any(|s| s.command.crate_address() == crate_address)
     }
 
     /// Queues `command` and returns its tag.
@@ -283,7 +289,12 @@ impl<const W: usize> Driver<W> {
             return Err(DriverError::CrateBusy(crate_address));
         }
         let tag = self.next_tag;
-        let slot = Slot { tag, command, state: SlotState::Queued, attempts: 0 };
+        let slot = Slot {
+            tag,
+            command,
+            state: SlotState::Queued,
+            attempts: 0,
+        };
         self.slots.push(slot).map_err(|_| DriverError::WindowFull)?;
         self.next_tag = self.next_tag.wrapping_add(1);
         Ok(tag)
@@ -308,7 +319,11 @@ impl<const W: usize> Driver<W> {
             }
             self.load_next();
         }
-        let byte = self.tx.get(usize::from(self.tx_pos)).copied().unwrap_or(WAIT);
+        let byte = self
+            .tx
+            .get(usize::from(self.tx_pos))
+            .copied()
+            .unwrap_or(WAIT);
         if self.tx_pos < self.tx_len {
             self.tx_pos = self.tx_pos.saturating_add(1);
             if self.tx_pos == self.tx_len {
@@ -330,7 +345,9 @@ impl<const W: usize> Driver<W> {
         };
         slot.attempts = slot.attempts.saturating_add(1);
         // The deadline counts from the last byte sent.
-        let deadline = now.saturating_add(len as u64).saturating_add(u64::from(self.config.timeout));
+        let deadline = now
+            .saturating_add(len as u64)
+            .saturating_add(u64::from(self.config.timeout));
         slot.state = SlotState::InFlight { deadline };
         self.tx_len = u8::try_from(len).unwrap_or(0);
         self.tx_pos = 0;
@@ -358,7 +375,11 @@ impl<const W: usize> Driver<W> {
         }
         let bytes = self.rx.get(..len).unwrap_or(&[]);
         match decode(bytes) {
-            Ok(Message::Reply { crate_address, status, data }) => self.on_reply(crate_address, status, data),
+            Ok(Message::Reply {
+                crate_address,
+                status,
+                data,
+            }) => self.on_reply(crate_address, status, data),
             Ok(Message::Demand { crate_address, sgl }) => {
                 self.stats.demands = self.stats.demands.saturating_add(1);
                 Some(DriverEvent::Demand { crate_address, sgl })
@@ -386,11 +407,17 @@ impl<const W: usize> Driver<W> {
 
     fn in_flight(&self, crate_address: u8) -> Option<usize> {
         self.slots.iter().position(|s| {
-            s.command.crate_address() == crate_address && matches!(s.state, SlotState::InFlight { .. })
+            s.command.crate_address() == crate_address
+                && matches!(s.state, SlotState::InFlight { .. })
         })
     }
 
-    fn on_reply(&mut self, crate_address: u8, status: Status, data: Option<u32>) -> Option<DriverEvent> {
+    fn on_reply(
+        &mut self,
+        crate_address: u8,
+        status: Status,
+        data: Option<u32>,
+    ) -> Option<DriverEvent> {
         let Some(index) = self.in_flight(crate_address) else {
             self.stats.unexpected = self.stats.unexpected.saturating_add(1);
             return None;
@@ -426,7 +453,11 @@ impl<const W: usize> Driver<W> {
             let (tag, command) = (slot.tag, slot.command);
             self.slots.remove(index);
             self.stats.failed = self.stats.failed.saturating_add(1);
-            return Some(DriverEvent::Failed { tag, command, failure });
+            return Some(DriverEvent::Failed {
+                tag,
+                command,
+                failure,
+            });
         }
         slot.state = SlotState::Queued;
         self.stats.retries = self.stats.retries.saturating_add(1);
@@ -452,15 +483,31 @@ mod tests {
     struct Echo;
     impl Dataway for Echo {
         fn cycle(&mut self, n: u8, a: u8, _f: u8, write: Option<u32>) -> Cycle {
-            Cycle { read: write.unwrap_or(u32::from(n) << 8 | u32::from(a)), x: true, q: true }
+            Cycle {
+                read: write.unwrap_or(u32::from(n) << 8 | u32::from(a)),
+                x: true,
+                q: true,
+            }
         }
     }
 
     #[test]
     fn submit_refuses_what_cannot_be_answered() {
         let mut d: Driver<1> = Driver::new(DriverConfig::default());
-        let cmd = |crate_address| Message::Command { crate_address, station: 1, subaddress: 0, function: 0, data: None };
-        assert_eq!(d.submit(Message::Demand { crate_address: 1, sgl: 1 }), Err(DriverError::NotACommand));
+        let cmd = |crate_address| Message::Command {
+            crate_address,
+            station: 1,
+            subaddress: 0,
+            function: 0,
+            data: None,
+        };
+        assert_eq!(
+            d.submit(Message::Demand {
+                crate_address: 1,
+                sgl: 1
+            }),
+            Err(DriverError::NotACommand)
+        );
         assert_eq!(d.submit(cmd(0)), Err(DriverError::NoReplyPossible(0)));
         assert_eq!(d.submit(cmd(63)), Err(DriverError::NoReplyPossible(63)));
         assert!(matches!(d.submit(cmd(64)), Err(DriverError::Encode(_))));
@@ -473,23 +520,44 @@ mod tests {
     fn a_loop_of_three_crates_answers_every_command() {
         let mut d: Driver<3> = Driver::new(DriverConfig::default());
         let mut crates: std::vec::Vec<Controller> = (1..=3)
-            .map(|a| Controller::new(ControllerConfig { address: a, demand_repeat: 0 }).unwrap())
+            .map(|a| {
+                Controller::new(ControllerConfig {
+                    address: a,
+                    demand_repeat: 0,
+                })
+                .unwrap()
+            })
             .collect();
         for a in 1..=3 {
-            d.submit(Message::Command { crate_address: a, station: a, subaddress: 2, function: 0, data: None })
-                .unwrap();
+            d.submit(Message::Command {
+                crate_address: a,
+                station: a,
+                subaddress: 2,
+                function: 0,
+                data: None,
+            })
+            .unwrap();
         }
         let mut line = WAIT;
         let mut done = std::vec::Vec::new();
         for _ in 0..200 {
             let step = d.clock(line);
-            line = crates.iter_mut().fold(step.transmit, |b, c| c.clock(b, &mut Echo));
+            line = crates
+                .iter_mut()
+                .fold(step.transmit, |b, c| c.clock(b, &mut Echo));
             if let Some(DriverEvent::Completed(c)) = step.event {
                 done.push((c.command.crate_address(), c.data, c.attempts));
             }
         }
         done.sort_unstable();
-        assert_eq!(done, std::vec![(1, Some(0x102), 1), (2, Some(0x202), 1), (3, Some(0x302), 1)]);
+        assert_eq!(
+            done,
+            std::vec![
+                (1, Some(0x102), 1),
+                (2, Some(0x202), 1),
+                (3, Some(0x302), 1)
+            ]
+        );
         assert_eq!(d.stats().short_replies, 3);
         assert_eq!(d.outstanding(), 0);
     }

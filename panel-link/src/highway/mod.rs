@@ -89,7 +89,11 @@ const STATION_MARK: u8 = 0x20;
 #[must_use]
 pub const fn with_parity(bits: u8) -> u8 {
     let bits = bits & 0x7F;
-    if bits.count_ones() & 1 == 0 { bits | PARITY } else { bits }
+    if bits.count_ones() & 1 == 0 {
+        bits | PARITY
+    } else {
+        bits
+    }
 }
 
 /// True when `byte` has odd row parity.
@@ -147,7 +151,12 @@ impl Status {
     /// The status in bits 1–4 of `bits`.
     #[must_use]
     pub const fn from_bits(bits: u8) -> Self {
-        Self { err: bits & 1 != 0, x: bits & 2 != 0, q: bits & 4 != 0, derr: bits & 8 != 0 }
+        Self {
+            err: bits & 1 != 0,
+            x: bits & 2 != 0,
+            q: bits & 4 != 0,
+            derr: bits & 8 != 0,
+        }
     }
 }
 
@@ -228,13 +237,21 @@ impl fmt::Display for EncodeError {
             Self::Function(v) => write!(f, "function must be 0..=31, got {v}"),
             Self::Sgl(v) => write!(f, "SGL must be 0..=31, got {v}"),
             Self::Data(v) => write!(f, "data must fit 24 bits, got {v:#x}"),
-            Self::DataPresence { function, has_data: true } => {
+            Self::DataPresence {
+                function,
+                has_data: true,
+            } => {
                 write!(f, "F{function} carries no write data, but data was given")
             }
-            Self::DataPresence { function, has_data: false } => {
+            Self::DataPresence {
+                function,
+                has_data: false,
+            } => {
                 write!(f, "F{function} is a write (F16-F23) and needs data")
             }
-            Self::BufferTooShort { needed } => write!(f, "output buffer too short: {needed} bytes needed"),
+            Self::BufferTooShort { needed } => {
+                write!(f, "output buffer too short: {needed} bytes needed")
+            }
         }
     }
 }
@@ -304,17 +321,34 @@ pub enum DecodeError {
 impl fmt::Display for DecodeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            Self::TooShort { len } => write!(f, "{len} bytes: a message has at least a header and a delimiter"),
+            Self::TooShort { len } => write!(
+                f,
+                "{len} bytes: a message has at least a header and a delimiter"
+            ),
             Self::TooLong { len } => write!(f, "{len} bytes: longer than any message"),
-            Self::RowParity { index } => write!(f, "row parity: byte {index} has an even number of ones"),
+            Self::RowParity { index } => {
+                write!(f, "row parity: byte {index} has an even number of ones")
+            }
             Self::Delimiter { index } => write!(f, "delimiter bit (bit 7) wrong in byte {index}"),
             Self::Truncated { crate_address } => {
-                write!(f, "header + END only (truncated command or short reply) from crate {crate_address}")
+                write!(
+                    f,
+                    "header + END only (truncated command or short reply) from crate {crate_address}"
+                )
             }
-            Self::ReservedBit { index } => write!(f, "byte {index} has a fixed bit with the wrong value"),
-            Self::Length { expected, got } => write!(f, "length {got}, the message type needs {expected}"),
-            Self::ColumnParity { index } => write!(f, "column parity: the sum byte {index} does not cancel the columns"),
-            Self::NotSpace { index } => write!(f, "byte {index} of a command's reply room is not SPACE"),
+            Self::ReservedBit { index } => {
+                write!(f, "byte {index} has a fixed bit with the wrong value")
+            }
+            Self::Length { expected, got } => {
+                write!(f, "length {got}, the message type needs {expected}")
+            }
+            Self::ColumnParity { index } => write!(
+                f,
+                "column parity: the sum byte {index} does not cancel the columns"
+            ),
+            Self::NotSpace { index } => {
+                write!(f, "byte {index} of a command's reply room is not SPACE")
+            }
             Self::NotEnd { byte } => write!(f, "a command must end with END, got {byte:#04x}"),
         }
     }
@@ -352,7 +386,9 @@ pub const fn data_bytes(word: u32) -> [u8; 4] {
 }
 
 fn data_word(bytes: &[u8]) -> u32 {
-    bytes.iter().fold(0, |acc, b| (acc << 6) | u32::from(b & COLUMNS))
+    bytes
+        .iter()
+        .fold(0, |acc, b| (acc << 6) | u32::from(b & COLUMNS))
 }
 
 /// A cursor writing into the caller's buffer.
@@ -409,7 +445,13 @@ impl Message {
             return Err(EncodeError::CrateAddress(crate_address));
         }
         let data = match *self {
-            Self::Command { station, subaddress, function, data, .. } => {
+            Self::Command {
+                station,
+                subaddress,
+                function,
+                data,
+                ..
+            } => {
                 if station > 31 {
                     return Err(EncodeError::Station(station));
                 }
@@ -420,7 +462,10 @@ impl Message {
                     return Err(EncodeError::Function(function));
                 }
                 if is_write(function) != data.is_some() {
-                    return Err(EncodeError::DataPresence { function, has_data: data.is_some() });
+                    return Err(EncodeError::DataPresence {
+                        function,
+                        has_data: data.is_some(),
+                    });
                 }
                 data
             }
@@ -465,7 +510,13 @@ impl Message {
         let mut w = Out { buf: out, len: 0 };
         w.push(with_parity(self.crate_address()));
         match *self {
-            Self::Command { station, subaddress, function, data, .. } => {
+            Self::Command {
+                station,
+                subaddress,
+                function,
+                data,
+                ..
+            } => {
                 w.push(with_parity(subaddress));
                 w.push(with_parity(function));
                 w.push(with_parity(STATION_MARK | station));
@@ -548,26 +599,44 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
     let second = field(1);
     if second & M2 != 0 {
         if len != 3 {
-            return Err(DecodeError::Length { expected: 3, got: len });
+            return Err(DecodeError::Length {
+                expected: 3,
+                got: len,
+            });
         }
         check_sum(bytes, 2)?;
-        return Ok(Message::Demand { crate_address, sgl: second & 0x1F });
+        return Ok(Message::Demand {
+            crate_address,
+            sgl: second & 0x1F,
+        });
     }
     if second & M1 != 0 {
         let data = match len {
             3 => None,
             7 => Some(data_word(bytes.get(2..6).unwrap_or(&[]))),
-            _ => return Err(DecodeError::Length { expected: if len < 7 { 3 } else { 7 }, got: len }),
+            _ => {
+                return Err(DecodeError::Length {
+                    expected: if len < 7 { 3 } else { 7 },
+                    got: len,
+                });
+            }
         };
         check_sum(bytes, last)?;
-        return Ok(Message::Reply { crate_address, status: Status::from_bits(second), data });
+        return Ok(Message::Reply {
+            crate_address,
+            status: Status::from_bits(second),
+            data,
+        });
     }
     // A command: header, SA, SF, SN, [data], SUM, SPACE…, END.
     let subaddress = second & 0x0F;
     let sf = field(2);
     let sn = field(3);
     if len < 9 {
-        return Err(DecodeError::Length { expected: 9, got: len });
+        return Err(DecodeError::Length {
+            expected: 9,
+            got: len,
+        });
     }
     if sf & 0x20 != 0 {
         return Err(DecodeError::ReservedBit { index: 2 });
@@ -578,27 +647,46 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
     let function = sf & 0x1F;
     let data_len = if is_write(function) { 4 } else { 0 };
     let sum_at = 4usize.saturating_add(data_len);
-    let expected = sum_at.saturating_add(1).saturating_add(reply_len(function)).saturating_add(1);
+    let expected = sum_at
+        .saturating_add(1)
+        .saturating_add(reply_len(function))
+        .saturating_add(1);
     if len < expected {
         return Err(DecodeError::Length { expected, got: len });
     }
     check_sum(bytes, sum_at)?;
     let room = bytes.get(sum_at.saturating_add(1)..last).unwrap_or(&[]);
     if let Some(k) = room.iter().position(|&b| b != SPACE) {
-        return Err(DecodeError::NotSpace { index: sum_at.saturating_add(1).saturating_add(k) });
+        return Err(DecodeError::NotSpace {
+            index: sum_at.saturating_add(1).saturating_add(k),
+        });
     }
     let end = bytes.get(last).copied().unwrap_or(0);
     if end != END {
         return Err(DecodeError::NotEnd { byte: end });
     }
-    let data = if data_len == 4 { Some(data_word(bytes.get(4..8).unwrap_or(&[]))) } else { None };
-    Ok(Message::Command { crate_address, station: sn & 0x1F, subaddress, function, data })
+    let data = if data_len == 4 {
+        Some(data_word(bytes.get(4..8).unwrap_or(&[])))
+    } else {
+        None
+    };
+    Ok(Message::Command {
+        crate_address,
+        station: sn & 0x1F,
+        subaddress,
+        function,
+        data,
+    })
 }
 
 /// Checks that the XOR of bits 1–6 over `bytes[..=at]` is zero.
 fn check_sum(bytes: &[u8], at: usize) -> Result<(), DecodeError> {
     let covered = bytes.get(..=at).unwrap_or(&[]);
-    if column_sum(covered) == 0 { Ok(()) } else { Err(DecodeError::ColumnParity { index: at }) }
+    if column_sum(covered) == 0 {
+        Ok(())
+    } else {
+        Err(DecodeError::ColumnParity { index: at })
+    }
 }
 
 #[cfg(test)]
@@ -618,12 +706,41 @@ mod tests {
     #[test]
     fn every_byte_of_every_message_has_odd_parity_and_one_delimiter_at_the_end() {
         let messages = [
-            Message::Command { crate_address: 62, station: 31, subaddress: 15, function: 16, data: Some(0xFF_FFFF) },
-            Message::Command { crate_address: 1, station: 0, subaddress: 0, function: 0, data: None },
-            Message::Command { crate_address: 1, station: 1, subaddress: 2, function: 9, data: None },
-            Message::Reply { crate_address: 7, status: Status::from_bits(0xF), data: Some(0) },
-            Message::Reply { crate_address: 7, status: Status::default(), data: None },
-            Message::Demand { crate_address: 9, sgl: 31 },
+            Message::Command {
+                crate_address: 62,
+                station: 31,
+                subaddress: 15,
+                function: 16,
+                data: Some(0xFF_FFFF),
+            },
+            Message::Command {
+                crate_address: 1,
+                station: 0,
+                subaddress: 0,
+                function: 0,
+                data: None,
+            },
+            Message::Command {
+                crate_address: 1,
+                station: 1,
+                subaddress: 2,
+                function: 9,
+                data: None,
+            },
+            Message::Reply {
+                crate_address: 7,
+                status: Status::from_bits(0xF),
+                data: Some(0),
+            },
+            Message::Reply {
+                crate_address: 7,
+                status: Status::default(),
+                data: None,
+            },
+            Message::Demand {
+                crate_address: 9,
+                sgl: 31,
+            },
         ];
         for m in messages {
             let mut buf = [0u8; MAX_MESSAGE];
@@ -647,26 +764,57 @@ mod tests {
             data,
         };
         let mut buf = [0x55u8; MAX_MESSAGE];
-        assert_eq!(cmd(64, 0, 0, 0, None).encode(&mut buf), Err(EncodeError::CrateAddress(64)));
-        assert_eq!(cmd(1, 32, 0, 0, None).encode(&mut buf), Err(EncodeError::Station(32)));
-        assert_eq!(cmd(1, 0, 16, 0, None).encode(&mut buf), Err(EncodeError::Subaddress(16)));
-        assert_eq!(cmd(1, 0, 0, 32, None).encode(&mut buf), Err(EncodeError::Function(32)));
+        assert_eq!(
+            cmd(64, 0, 0, 0, None).encode(&mut buf),
+            Err(EncodeError::CrateAddress(64))
+        );
+        assert_eq!(
+            cmd(1, 32, 0, 0, None).encode(&mut buf),
+            Err(EncodeError::Station(32))
+        );
+        assert_eq!(
+            cmd(1, 0, 16, 0, None).encode(&mut buf),
+            Err(EncodeError::Subaddress(16))
+        );
+        assert_eq!(
+            cmd(1, 0, 0, 32, None).encode(&mut buf),
+            Err(EncodeError::Function(32))
+        );
         assert_eq!(
             cmd(1, 0, 0, 16, None).encode(&mut buf),
-            Err(EncodeError::DataPresence { function: 16, has_data: false })
+            Err(EncodeError::DataPresence {
+                function: 16,
+                has_data: false
+            })
         );
         assert_eq!(
             cmd(1, 0, 0, 0, Some(1)).encode(&mut buf),
-            Err(EncodeError::DataPresence { function: 0, has_data: true })
+            Err(EncodeError::DataPresence {
+                function: 0,
+                has_data: true
+            })
         );
-        assert_eq!(cmd(1, 0, 0, 16, Some(1 << 24)).encode(&mut buf), Err(EncodeError::Data(1 << 24)));
-        assert_eq!(Message::Demand { crate_address: 1, sgl: 32 }.encode(&mut buf), Err(EncodeError::Sgl(32)));
+        assert_eq!(
+            cmd(1, 0, 0, 16, Some(1 << 24)).encode(&mut buf),
+            Err(EncodeError::Data(1 << 24))
+        );
+        assert_eq!(
+            Message::Demand {
+                crate_address: 1,
+                sgl: 32
+            }
+            .encode(&mut buf),
+            Err(EncodeError::Sgl(32))
+        );
         assert_eq!(
             cmd(1, 0, 0, 16, Some(1)).encode(&mut buf[..12]),
             Err(EncodeError::BufferTooShort { needed: 13 })
         );
         assert!(buf.iter().all(|&b| b == 0x55));
-        for text in [EncodeError::Station(32).to_string(), DecodeError::RowParity { index: 3 }.to_string()] {
+        for text in [
+            EncodeError::Station(32).to_string(),
+            DecodeError::RowParity { index: 3 }.to_string(),
+        ] {
             assert!(text.contains("32") || text.contains('3'), "{text}");
         }
     }
@@ -674,33 +822,65 @@ mod tests {
     #[test]
     fn decode_names_the_rule() {
         let mut buf = [0u8; MAX_MESSAGE];
-        let cmd = Message::Command { crate_address: 4, station: 2, subaddress: 1, function: 9, data: None };
+        let cmd = Message::Command {
+            crate_address: 4,
+            station: 2,
+            subaddress: 1,
+            function: 9,
+            data: None,
+        };
         let len = cmd.encode(&mut buf).unwrap();
         assert_eq!(len, 9);
         assert_eq!(decode(&[]), Err(DecodeError::TooShort { len: 0 }));
-        assert_eq!(decode(&[with_parity(4), END]), Err(DecodeError::Truncated { crate_address: 4 }));
+        assert_eq!(
+            decode(&[with_parity(4), END]),
+            Err(DecodeError::Truncated { crate_address: 4 })
+        );
         // One SPACE short of the reply.
         let short = [&buf[..5], &[SPACE, SPACE, END]].concat();
-        assert_eq!(decode(&short), Err(DecodeError::Length { expected: 9, got: 8 }));
+        assert_eq!(
+            decode(&short),
+            Err(DecodeError::Length {
+                expected: 9,
+                got: 8
+            })
+        );
         // Extra SPACE is fine (the driver may give more room than needed).
         let long = [&buf[..5], &[SPACE; 5], &[END]].concat();
         assert_eq!(decode(&long), Ok(cmd));
         // A delimiter in the text.
         let mut bad = buf;
         bad[2] = with_parity(DELIMITER | 9);
-        assert_eq!(decode(&bad[..len]), Err(DecodeError::Delimiter { index: 2 }));
+        assert_eq!(
+            decode(&bad[..len]),
+            Err(DecodeError::Delimiter { index: 2 })
+        );
         // SN without its bit 6.
         let mut bad = buf;
         bad[3] = with_parity(2);
-        assert_eq!(decode(&bad[..len]), Err(DecodeError::ReservedBit { index: 3 }));
+        assert_eq!(
+            decode(&bad[..len]),
+            Err(DecodeError::ReservedBit { index: 3 })
+        );
         // ENDSUM where END belongs.
         let mut bad = buf;
         bad[8] = with_parity(DELIMITER | 1);
-        assert_eq!(decode(&bad[..len]), Err(DecodeError::NotEnd { byte: bad[8] }));
+        assert_eq!(
+            decode(&bad[..len]),
+            Err(DecodeError::NotEnd { byte: bad[8] })
+        );
         // A reply of the wrong length.
         assert_eq!(
-            decode(&[with_parity(4), with_parity(M1), with_parity(1), endsum_byte(&[4, M1, 1])]),
-            Err(DecodeError::Length { expected: 3, got: 4 })
+            decode(&[
+                with_parity(4),
+                with_parity(M1),
+                with_parity(1),
+                endsum_byte(&[4, M1, 1])
+            ]),
+            Err(DecodeError::Length {
+                expected: 3,
+                got: 4
+            })
         );
     }
 }
