@@ -1,6 +1,15 @@
 //! Serial-highway evidence: every 1-, 2- and 3-bit error is rejected (exhaustively), round trips
 //! of every message kind, decode never panics on any bytes, and the crate controller runs
 //! exactly the command that was sent or nothing, and always recovers.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::unreachable,
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::cast_possible_truncation,
+    reason = "a test may panic: that is how it fails"
+)]
 
 use proptest::prelude::*;
 use regler_panel_link::highway::{

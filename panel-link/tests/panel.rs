@@ -3,6 +3,15 @@
 //!
 //! Properties: after any single damaged byte the panel's registers are right again once the next
 //! full sequence is through; a key is never delivered twice or altered, whatever the noise.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::unreachable,
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::cast_possible_truncation,
+    reason = "a test may panic: that is how it fails"
+)]
 
 use std::collections::VecDeque;
 
@@ -129,7 +138,7 @@ impl<const R: usize> Sim<R> {
         if let Some(key) = self.panel.set_san(self.host.san()) {
             self.up.queue.push_back(framing.encode(key));
         }
-        if self.now % 10_000 == 0 {
+        if self.now.is_multiple_of(10_000) {
             if let Some(HostEvent::KeyTimedOut) = self.host.poll_mot(self.panel.mot()) {
                 self.timeouts += 1;
             }
