@@ -3,6 +3,7 @@
 //! lives here so the integration tests can drive it directly.
 
 pub mod autonomous;
+pub mod highway;
 pub mod knitter;
 pub mod mailbag;
 pub mod plc;

@@ -1,0 +1,174 @@
+//! End-to-end: the `serial-highway` binary on a simulated noisy loop, and over a real
+//! pseudo-terminal pair made by `socat`.
+
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+fn highway(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_serial-highway"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn json(args: &[&str]) -> Value {
+    let out = highway(&[args, &["--json", "--no-svg"]].concat());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn a_noisy_loop_of_62_crates_detects_every_error() {
+    let r = json(&["--messages", "20000", "--seed", "3"]);
+    assert_eq!(r["completed"], 20000, "{r}");
+    assert_eq!(r["undetected_errors"], 0, "{r}");
+    // The noise did bite, and was caught at the crates and at the driver.
+    assert!(r["bits_flipped"].as_u64().unwrap() > 50, "{r}");
+    assert!(r["detected_at_crates"].as_u64().unwrap() > 0, "{r}");
+    assert!(r["garbled_at_driver"].as_u64().unwrap() > 0, "{r}");
+    assert!(r["retries"].as_u64().unwrap() > 0, "{r}");
+    // Counters raised LAMs; every demand was served.
+    assert!(r["demands"].as_u64().unwrap() > 0, "{r}");
+    let crates = r["crates"].as_array().unwrap();
+    assert_eq!(crates.len(), 62);
+    let sum = |f: &str| crates.iter().map(|c| c[f].as_u64().unwrap()).sum::<u64>();
+    assert_eq!(sum("replies"), 20000);
+    assert!(sum("demands_served") > 0);
+    // Throughput: a 13-byte command per 14 clocks at best, at 5 MHz.
+    let rate = r["messages_per_s_byte_serial"].as_f64().unwrap();
+    assert!(rate > 100_000.0 && rate < 5e6 / 13.0, "{rate}");
+}
+
+#[test]
+fn bit_serial_line_and_a_small_loop() {
+    let r = json(&[
+        "--messages",
+        "5000",
+        "--crates",
+        "5",
+        "--line",
+        "bit-serial",
+        "--ber",
+        "1e-4",
+    ]);
+    assert_eq!(r["completed"], 5000, "{r}");
+    assert_eq!(r["undetected_errors"], 0, "{r}");
+    assert_eq!(r["config"]["line"], "bit-serial");
+    let byte = r["messages_per_s_byte_serial"].as_f64().unwrap();
+    let bit = r["messages_per_s_bit_serial"].as_f64().unwrap();
+    assert!(
+        (byte / bit - 10.0).abs() < 1e-6,
+        "10 bits per byte: {byte} vs {bit}"
+    );
+}
+
+#[test]
+fn a_seed_gives_the_same_run() {
+    let a = json(&["--messages", "3000", "--seed", "9", "--ber", "1e-4"]);
+    let b = json(&["--messages", "3000", "--seed", "9", "--ber", "1e-4"]);
+    assert_eq!(a, b);
+    let c = json(&["--messages", "3000", "--seed", "10", "--ber", "1e-4"]);
+    assert_ne!(a["bits_flipped"], c["bits_flipped"]);
+}
+
+#[test]
+fn human_summary_and_picture() {
+    let dir = std::env::temp_dir().join(format!("regler-sh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let svg = dir.join("highway.svg");
+    let out = highway(&[
+        "--messages",
+        "2000",
+        "--crates",
+        "10",
+        "--quiet",
+        "--svg",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("undetected errors: 0"), "{text}");
+    assert!(text.contains("commands/s at 5 MHz byte-serial"), "{text}");
+    let picture = std::fs::read_to_string(&svg).unwrap();
+    assert!(picture.contains("</svg>") && picture.contains("retries"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_arguments_are_errors_not_panics() {
+    for args in [
+        &["--crates", "0"][..],
+        &["--crates", "63"],
+        &["--ber", "0.7"],
+        &["--window", "0"],
+        &["--messages", "0"],
+    ] {
+        let out = highway(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.starts_with("serial-highway: "), "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+/// The driver and one crate over a real pseudo-terminal pair, through the `embedded-io` adapter
+/// and the `serialport` crate. Runs when `socat` is installed (`.ci/run` installs it).
+#[test]
+fn driver_and_crate_over_a_socat_pty_pair() {
+    if Command::new("socat")
+        .arg("-V")
+        .stdout(Stdio::null())
+        .status()
+        .is_err()
+    {
+        eprintln!("socat not installed: skipping the serial-port test (.ci/run installs it)");
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("regler-pty-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (a, b) = (dir.join("driver"), dir.join("crate"));
+    let mut socat = Command::new("socat")
+        .arg(format!("pty,raw,echo=0,link={}", a.display()))
+        .arg(format!("pty,raw,echo=0,link={}", b.display()))
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while !(a.exists() && b.exists()) {
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "socat made no ptys"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let out = highway(&[
+        "--ports",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--messages",
+        "200",
+        "--json",
+    ]);
+    socat.kill().ok();
+    socat.wait().ok();
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(r["completed"], 200, "{r}");
+    assert_eq!(r["failed"], 0, "{r}");
+    assert_eq!(r["undetected_errors"], 0, "{r}");
+}
