@@ -71,7 +71,7 @@ impl Default for Config {
             seed: 1976,
             line: LineKind::ByteSerial,
             window: WINDOW,
-            retries: 3,
+            retries: 5,
             lam_preset: 5_000,
             count_period: 7,
             byte_rate_hz: 5e6,
@@ -534,6 +534,13 @@ impl Sim {
                     _ => false,
                 };
                 if !ok {
+                    if std::env::var_os("HIGHWAY_DEBUG").is_some() {
+                        eprintln!(
+                            "wrong cycle at crate {address}, clock {clocks}: {:?}\n  issued {:?}",
+                            dataway.log.last(),
+                            self.issued[usize::from(address)]
+                        );
+                    }
                     self.undetected += 1;
                     self.undetected_kinds.wrong_cycles += 1;
                 }
@@ -543,8 +550,13 @@ impl Sim {
         self.line_in = self.carry(byte, last);
         match step.event {
             Some(DriverEvent::Completed(done)) => self.completed(done),
-            Some(DriverEvent::Failed { command, .. }) => {
+            Some(DriverEvent::Failed {
+                command, failure, ..
+            }) => {
                 let address = command.crate_address();
+                if std::env::var_os("HIGHWAY_DEBUG").is_some() {
+                    eprintln!("failed at clock {clocks}: {command:?} {failure:?}");
+                }
                 self.per_crate[usize::from(address)].failed += 1;
                 self.done += 1;
             }

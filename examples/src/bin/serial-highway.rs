@@ -45,8 +45,9 @@ struct Args {
     /// Commands in flight at most (1–16, one per crate).
     #[arg(long, default_value_t = 16)]
     window: usize,
-    /// Retries per command.
-    #[arg(long, default_value_t = 3)]
+    /// Retries per command (each waits for the attempt's deadline: the highway has no sequence
+    /// numbers, so nothing may be resent while a copy could still be on the loop).
+    #[arg(long, default_value_t = 5)]
     retries: u8,
     /// Bit-serial bit rate (bit/s) for the throughput figure.
     #[arg(long, default_value_t = 5e6)]

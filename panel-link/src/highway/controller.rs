@@ -9,6 +9,11 @@ use super::{
     is_delimiter, is_read, is_write, row_parity_ok, with_parity,
 };
 
+/// A delimiter with good row parity: only such a byte ends a message or makes a gap.
+const fn clean_delimiter(byte: u8) -> bool {
+    is_delimiter(byte) && row_parity_ok(byte)
+}
+
 /// What a CAMAC dataway cycle answered.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -279,23 +284,31 @@ impl Controller {
     fn take<D: Dataway + ?Sized>(&mut self, input: u8, dataway: &mut D) -> Option<u8> {
         match self.rx {
             Rx::Between => {
-                if is_delimiter(input) {
+                if clean_delimiter(input) {
                     return None;
                 }
-                self.rx = Rx::Second { header: input };
+                // A damaged delimiter is not trusted as a gap, nor as a header: what follows is
+                // passed on as junk up to the next clean delimiter, so the rest of a message can
+                // never be taken for a new one.
+                self.rx = if is_delimiter(input) {
+                    Rx::Passing
+                } else {
+                    Rx::Second { header: input }
+                };
                 Some(input)
             }
             Rx::Second { header } => {
-                if is_delimiter(input) {
+                if clean_delimiter(input) {
                     // Header + END: a truncated command is answered at once by passing it on —
                     // it is itself the short reply.
                     self.rx = Rx::Between;
                     return Some(input);
                 }
                 let ours = row_parity_ok(header) && header & COLUMNS == self.config.address;
-                // A reply or demand with our header cannot be for us: only commands are.
+                // A reply or demand with our header cannot be for us: only commands are. A
+                // damaged second byte of a command to us makes an ERR reply.
                 let command = !row_parity_ok(input) || input & (M1 | M2) == 0;
-                if ours && command {
+                if ours && command && !is_delimiter(input) {
                     self.start_command(header, input);
                     Some(END)
                 } else {
@@ -305,7 +318,7 @@ impl Controller {
                 }
             }
             Rx::Passing => {
-                if is_delimiter(input) {
+                if clean_delimiter(input) {
                     self.rx = Rx::Between;
                 }
                 Some(input)
@@ -333,14 +346,18 @@ impl Controller {
     fn command_byte<D: Dataway + ?Sized>(&mut self, input: u8, dataway: &mut D) -> u8 {
         let pos = self.pos;
         self.pos = self.pos.saturating_add(1);
-        if is_delimiter(input) {
-            // END (or a damaged byte that looks like one): the command is over.
+        if clean_delimiter(input) {
+            // END: the command is over (early, if no reply was written yet).
             self.rx = Rx::Between;
             if !self.answered {
                 self.stats.truncated = self.stats.truncated.saturating_add(1);
                 self.last_error = true;
             }
             return END;
+        }
+        if is_delimiter(input) {
+            // A damaged delimiter: an error in the command, not its end.
+            self.error = true;
         }
         if self.answered {
             // Reply room: the rest of the reply, then WAIT for any SPACE beyond it.

@@ -6,7 +6,7 @@ use heapless::Vec;
 
 use super::{
     DecodeError, EncodeError, MAX_DECODE, MAX_MESSAGE, Message, NON_ADDRESSED, Status, WAIT,
-    decode, is_delimiter, is_read,
+    decode, is_delimiter, is_read, row_parity_ok,
 };
 
 /// How a [`Driver`] works the loop.
@@ -18,8 +18,8 @@ pub struct DriverConfig {
     /// loop's round trip (controllers × 4 bytes of delay at most, plus two messages), so a reply
     /// can never arrive after its command was given up or sent again.
     pub timeout: u32,
-    /// How many times a command is sent again (after ERR, no answer, or a time-out) before it
-    /// fails.
+    /// How many times a command is sent again before it fails. A resend waits for the attempt's
+    /// deadline even after an ERR reply or an unanswered return (see [`Driver`]).
     pub retries: u8,
     /// WAIT bytes after each command (room for the controllers' demands; 0 is allowed: a
     /// controller also sends a demand right after a message).
@@ -179,6 +179,9 @@ struct Slot {
     command: Message,
     state: SlotState,
     attempts: u8,
+    /// ERR or an unanswered return seen for the attempt in flight: the reason it is resent
+    /// when its deadline passes.
+    noted: Option<Failure>,
 }
 
 /// The driver (SC0) as a byte machine: `W` commands outstanding at most, one per crate.
@@ -294,6 +297,7 @@ impl<const W: usize> Driver<W> {
             command,
             state: SlotState::Queued,
             attempts: 0,
+            noted: None,
         };
         self.slots.push(slot).map_err(|_| DriverError::WindowFull)?;
         self.next_tag = self.next_tag.wrapping_add(1);
@@ -344,6 +348,7 @@ impl<const W: usize> Driver<W> {
             return; // validated in submit
         };
         slot.attempts = slot.attempts.saturating_add(1);
+        slot.noted = None;
         // The deadline counts from the last byte sent.
         let deadline = now
             .saturating_add(len as u64)
@@ -355,7 +360,8 @@ impl<const W: usize> Driver<W> {
     }
 
     fn receive(&mut self, input: u8) -> Option<DriverEvent> {
-        if self.rx_len == 0 && is_delimiter(input) {
+        let clean_delimiter = is_delimiter(input) && row_parity_ok(input);
+        if self.rx_len == 0 && clean_delimiter {
             return None; // gap
         }
         match self.rx.get_mut(self.rx_len) {
@@ -365,7 +371,9 @@ impl<const W: usize> Driver<W> {
         if !self.rx_overflow {
             self.rx_len = self.rx_len.saturating_add(1);
         }
-        if !is_delimiter(input) {
+        // Only a clean delimiter ends a message: a damaged one is kept in, so the rest of a
+        // message can never be taken for a message of its own.
+        if !clean_delimiter {
             return None;
         }
         let len = core::mem::take(&mut self.rx_len);
@@ -390,7 +398,8 @@ impl<const W: usize> Driver<W> {
                     return None;
                 }
                 self.stats.no_response = self.stats.no_response.saturating_add(1);
-                self.retry(index, Failure::NoResponse)
+                self.note(index, Failure::NoResponse);
+                None
             }
             Err(DecodeError::Truncated { .. }) => {
                 self.stats.short_replies = self.stats.short_replies.saturating_add(1);
@@ -425,7 +434,8 @@ impl<const W: usize> Driver<W> {
         let slot = *self.slots.get(index)?;
         if status.err {
             self.stats.err_replies = self.stats.err_replies.saturating_add(1);
-            return self.retry(index, Failure::Err);
+            self.note(index, Failure::Err);
+            return None;
         }
         let Message::Command { function, .. } = slot.command else {
             return None;
@@ -444,6 +454,16 @@ impl<const W: usize> Driver<W> {
             data,
             attempts: slot.attempts,
         }))
+    }
+
+    /// Resending at once would be unsafe: the highway carries no sequence numbers, and an ERR
+    /// reply may be a damaged message's ghost while the attempt is still on its way. So the
+    /// attempt is resent only when its deadline has passed and nothing of it can still be on the
+    /// loop; a good reply meanwhile still completes it.
+    fn note(&mut self, index: usize, failure: Failure) {
+        if let Some(slot) = self.slots.get_mut(index) {
+            slot.noted = Some(failure);
+        }
     }
 
     fn retry(&mut self, index: usize, failure: Failure) -> Option<DriverEvent> {
@@ -470,8 +490,11 @@ impl<const W: usize> Driver<W> {
             .slots
             .iter()
             .position(|s| matches!(s.state, SlotState::InFlight { deadline } if now >= deadline))?;
-        self.stats.timeouts = self.stats.timeouts.saturating_add(1);
-        self.retry(index, Failure::Timeout)
+        let noted = self.slots.get(index).and_then(|s| s.noted);
+        if noted.is_none() {
+            self.stats.timeouts = self.stats.timeouts.saturating_add(1);
+        }
+        self.retry(index, noted.unwrap_or(Failure::Timeout))
     }
 }
 
