@@ -24,14 +24,19 @@ fn workload() -> Vec<Message> {
                     station: (x >> 16) as u8 % 32,
                     subaddress: (x >> 24) as u8 % 16,
                     function: f,
-                    data: (16..=23).contains(&f).then_some((x >> 32) as u32 & 0xFF_FFFF),
+                    data: (16..=23)
+                        .contains(&f)
+                        .then_some((x >> 32) as u32 & 0xFF_FFFF),
                 },
                 2 => Message::Reply {
                     crate_address: 1 + (x >> 8) as u8 % 62,
                     status: Status::from_bits((x >> 40) as u8),
                     data: (x & 1 == 0).then_some((x >> 12) as u32 & 0xFF_FFFF),
                 },
-                _ => Message::Demand { crate_address: 1 + (x >> 8) as u8 % 62, sgl: (x >> 20) as u8 % 32 },
+                _ => Message::Demand {
+                    crate_address: 1 + (x >> 8) as u8 % 62,
+                    sgl: (x >> 20) as u8 % 32,
+                },
             }
         })
         .collect()
@@ -111,7 +116,11 @@ impl Dataway for Registers {
         if let Some(w) = write {
             *reg = w;
         }
-        Cycle { read: *reg, x: true, q: f < 8 }
+        Cycle {
+            read: *reg,
+            x: true,
+            q: f < 8,
+        }
     }
 }
 
@@ -130,7 +139,11 @@ fn controller(c: &mut Criterion) {
     let mut group = c.benchmark_group("controller_stream");
     group.throughput(Throughput::Bytes(bytes.len() as u64));
     let mut crate_ = Registers([0; 32]);
-    let mut ctl = Controller::new(ControllerConfig { address: 7, demand_repeat: 0 }).expect("valid address");
+    let mut ctl = Controller::new(ControllerConfig {
+        address: 7,
+        demand_repeat: 0,
+    })
+    .expect("valid address");
     group.bench_function("regler_controller_clock", |b| {
         b.iter(|| {
             for (o, &i) in out.iter_mut().zip(black_box(&bytes)) {

@@ -16,6 +16,7 @@ use cortex_m_semihosting::{debug, hprintln};
 use panic_semihosting as _;
 
 mod chain;
+mod link;
 mod pid;
 mod ring;
 mod scan;
@@ -40,6 +41,15 @@ macro_rules! check {
 }
 
 const TESTS: &[Test] = &[
+    (
+        "link::highway_rejects_every_one_and_two_bit_error",
+        link::highway_rejects_every_one_and_two_bit_error,
+    ),
+    (
+        "link::highway_loop_with_noise",
+        link::highway_loop_with_noise,
+    ),
+    ("link::panel_sequence_and_key", link::panel_sequence_and_key),
     (
         "pid::f32_closed_loop_survives_nan_at_power_up",
         pid::f32_closed_loop_survives_nan_at_power_up,

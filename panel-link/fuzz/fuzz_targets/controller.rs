@@ -18,7 +18,11 @@ impl Dataway for Crate {
         self.cycles += 1;
         assert!(n < 32);
         assert!(write.is_none_or(|w| w < 1 << 24));
-        Cycle { read: 0x00AB_CDEF, x: true, q: false }
+        Cycle {
+            read: 0x00AB_CDEF,
+            x: true,
+            q: false,
+        }
     }
     fn graded_lam(&mut self) -> u8 {
         self.lam
@@ -26,10 +30,18 @@ impl Dataway for Crate {
 }
 
 fuzz_target!(|data: &[u8]| {
-    let Some((&first, stream)) = data.split_first() else { return };
-    let mut controller =
-        Controller::new(ControllerConfig { address: 1 + first % 62, demand_repeat: u32::from(first) }).unwrap();
-    let mut crate_ = Crate { cycles: 0, lam: first >> 3 };
+    let Some((&first, stream)) = data.split_first() else {
+        return;
+    };
+    let mut controller = Controller::new(ControllerConfig {
+        address: 1 + first % 62,
+        demand_repeat: u32::from(first),
+    })
+    .unwrap();
+    let mut crate_ = Crate {
+        cycles: 0,
+        lam: first >> 3,
+    };
     for &byte in stream {
         controller.clock(byte, &mut crate_);
         assert!(controller.held() <= 3);

@@ -12,7 +12,11 @@ fuzz_target!(|data: &[u8]| {
         let len = message.encode(&mut buf).expect("a decoded message encodes");
         assert_eq!(decode(&buf[..len]), Ok(message));
         if len == data.len() {
-            assert_eq!(&buf[..len], data, "canonical length re-encodes byte for byte");
+            assert_eq!(
+                &buf[..len],
+                data,
+                "canonical length re-encodes byte for byte"
+            );
         }
     }
 });

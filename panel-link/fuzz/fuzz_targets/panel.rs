@@ -6,16 +6,24 @@
 
 use libfuzzer_sys::fuzz_target;
 use regler_panel_link::line::LineError;
-use regler_panel_link::panel::{Host, HostConfig, Panel, MAX_VALUE};
+use regler_panel_link::panel::{Host, HostConfig, MAX_VALUE, Panel};
 
 fuzz_target!(|data: &[u8]| {
-    let mut host: Host<7> = Host::new(HostConfig { key_timeout_polls: 3, mot_stuck_polls: 5 }).unwrap();
+    let mut host: Host<7> = Host::new(HostConfig {
+        key_timeout_polls: 3,
+        mot_stuck_polls: 5,
+    })
+    .unwrap();
     let mut panel: Panel<7> = Panel::new();
     for pair in data.chunks_exact(2) {
         let (op, arg) = (pair[0], pair[1]);
         match op % 8 {
             0 => panel.receive(Ok(arg)),
-            1 => panel.receive(Err(if arg & 1 == 0 { LineError::Parity } else { LineError::Framing })),
+            1 => panel.receive(Err(if arg & 1 == 0 {
+                LineError::Parity
+            } else {
+                LineError::Framing
+            })),
             2 => {
                 let _ = panel.press(arg);
             }
@@ -29,7 +37,11 @@ fuzz_target!(|data: &[u8]| {
                 let _ = host.poll_mot(arg & 1 == 1);
             }
             6 => {
-                let _ = host.receive(if arg == 0 { Err(LineError::Parity) } else { Ok(arg) });
+                let _ = host.receive(if arg == 0 {
+                    Err(LineError::Parity)
+                } else {
+                    Ok(arg)
+                });
             }
             _ => {
                 let _ = host.set(usize::from(arg % 8), arg >> 1);
