@@ -172,3 +172,55 @@ fn driver_and_crate_over_a_socat_pty_pair() {
     assert_eq!(r["failed"], 0, "{r}");
     assert_eq!(r["undetected_errors"], 0, "{r}");
 }
+
+#[test]
+fn a_scripted_workload_runs_in_order_and_a_bad_line_is_named() {
+    let dir = std::env::temp_dir().join(format!("regler-hs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let script = dir.join("work.txt");
+    std::fs::write(
+        &script,
+        "# write, read back, clear\n3 1 2 16 0xABCDEF\n3 1 2 0\n3 1 2 9\n7 20 0 8 # LAM test\n",
+    )
+    .unwrap();
+    let r = json(&[
+        "--script",
+        script.to_str().unwrap(),
+        "--messages",
+        "400",
+        "--crates",
+        "8",
+    ]);
+    assert_eq!(r["completed"], 400, "{r}");
+    assert_eq!(r["undetected_errors"], 0, "{r}");
+    let crates = r["crates"].as_array().unwrap();
+    // Three of every four lines go to crate 3, one to crate 7; demands add counter reads.
+    assert!(crates[2]["messages"].as_u64().unwrap() >= 300, "{r}");
+    assert!(crates[6]["messages"].as_u64().unwrap() >= 100, "{r}");
+    std::fs::write(&script, "3 1 2 0\n3 1 2 16\n").unwrap();
+    let out = highway(&[
+        "--script",
+        script.to_str().unwrap(),
+        "--messages",
+        "10",
+        "--no-svg",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("script line 2") && err.contains("needs data"),
+        "{err}"
+    );
+    std::fs::write(&script, "20 1 2 0\n").unwrap();
+    let out = highway(&[
+        "--script",
+        script.to_str().unwrap(),
+        "--messages",
+        "10",
+        "--crates",
+        "8",
+        "--no-svg",
+    ]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not on the loop"));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -49,6 +49,10 @@ struct Args {
     /// numbers, so nothing may be resent while a copy could still be on the loop).
     #[arg(long, default_value_t = 5)]
     retries: u8,
+    /// A scripted workload instead of the random one: lines `CRATE STATION SUBADDRESS FUNCTION
+    /// [DATA]` (e.g. `5 1 0 16 0x1234` writes, `5 1 0 0` reads back), run in order, over and over.
+    #[arg(long)]
+    script: Option<PathBuf>,
     /// Bit-serial bit rate (bit/s) for the throughput figure.
     #[arg(long, default_value_t = 5e6)]
     bit_rate: f64,
@@ -116,7 +120,13 @@ fn run(args: &Args) -> Result<(), String> {
         bit_rate_hz: args.bit_rate,
         ..Config::default()
     };
+    let crates = config.crates;
     let mut sim = Sim::new(config)?;
+    if let Some(path) = &args.script {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+        sim.set_script(highway::parse_script(&text, crates)?);
+    }
     let bar = if args.quiet || args.json {
         ProgressBar::hidden()
     } else {
