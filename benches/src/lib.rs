@@ -3,6 +3,7 @@
 
 pub mod count_down;
 pub mod dock;
+pub mod highway;
 pub mod naive_decode;
 pub mod pid_loop;
 pub mod ring_pairs;

@@ -148,8 +148,10 @@ enum Rx {
 #[derive(Clone, Debug)]
 pub struct Controller {
     config: ControllerConfig,
-    /// Bytes decided but not yet sent: the one-byte delay, plus up to 3 held behind a demand.
-    out: Deque<u8, 4>,
+    /// The one-byte delay register: the byte that goes out next clock.
+    delayed: u8,
+    /// Up to 3 bytes held behind a demand.
+    held: Deque<u8, 3>,
     rx: Rx,
     // The addressed command being taken.
     pos: u8,
@@ -183,7 +185,8 @@ impl Controller {
         }
         Ok(Self {
             config,
-            out: Deque::new(),
+            delayed: WAIT,
+            held: Deque::new(),
             rx: Rx::Between,
             pos: 0,
             columns: 0,
@@ -226,42 +229,44 @@ impl Controller {
     /// Bytes held back beyond the one-byte delay (0–3, non-zero after a demand).
     #[must_use]
     pub fn held(&self) -> usize {
-        self.out.len().saturating_sub(1)
+        self.held.len()
     }
 
     /// One byte clock: takes the byte from upstream, returns the byte for downstream.
     pub fn clock<D: Dataway + ?Sized>(&mut self, input: u8, dataway: &mut D) -> u8 {
-        let out = self.out.pop_front().unwrap_or(WAIT);
+        let out = self.delayed;
         let decided = self.take(input, dataway);
-        let gap = decided.is_none();
         let byte = decided.unwrap_or(WAIT);
-        let boundary = self.rx == Rx::Between;
         self.since_demand = self.since_demand.saturating_add(1);
-        if boundary && self.out.is_empty() {
+        if let Some(next) = self.held.pop_front() {
+            // Bytes are held behind a demand: they go first. A gap byte is dropped meanwhile:
+            // that is how the delay shrinks back to one byte.
+            self.delayed = next;
+            if decided.is_some() {
+                let _ = self.held.push_back(byte); // one out, at most one in: never full
+            }
+            return out;
+        }
+        self.delayed = byte;
+        if self.rx == Rx::Between {
             if let Some(sgl) = self.demand_due(dataway) {
-                if !gap {
-                    self.hold(byte);
-                }
                 let header = with_parity(self.config.address);
                 let sgl_byte = with_parity(M2 | sgl);
-                self.hold(header);
-                self.hold(sgl_byte);
-                self.hold(endsum_byte(&[header, sgl_byte]));
+                let demand = [header, sgl_byte, endsum_byte(&[header, sgl_byte])];
+                // In place of a gap byte, or right after the delimiter that ended a message.
+                let rest = if decided.is_none() {
+                    self.delayed = header;
+                    demand.get(1..).unwrap_or(&[])
+                } else {
+                    &demand[..]
+                };
+                for &b in rest {
+                    let _ = self.held.push_back(b); // at most 3 into an empty queue of 3
+                }
                 self.stats.demands = self.stats.demands.saturating_add(1);
-                return out;
             }
         }
-        // A gap byte is dropped while bytes are held: that is how the delay shrinks back to one.
-        if !gap || self.out.is_empty() {
-            self.hold(byte);
-        }
         out
-    }
-
-    fn hold(&mut self, byte: u8) {
-        // Capacity 4 = delay + 3 held; `clock` never holds more (a demand only starts when
-        // nothing is held), so this cannot fail.
-        let _ = self.out.push_back(byte);
     }
 
     fn demand_due<D: Dataway + ?Sized>(&mut self, dataway: &mut D) -> Option<u8> {

@@ -1,0 +1,139 @@
+//! The serial-highway workload the `panel_link` bench and the `highway-codec` instruction counter
+//! share: 1 024 messages of every kind and shape, their encoded bytes, and a crate that answers.
+
+use regler_panel_link::highway::{
+    Controller, ControllerConfig, Cycle, Dataway, MAX_MESSAGE, Message, Status, decode,
+};
+
+/// 1 024 messages of every kind and shape from a fixed xorshift generator; every third command
+/// is addressed to crate 7 (the controller bench's own crate).
+#[must_use]
+pub fn workload() -> Vec<Message> {
+    let mut x = 0x2545_F491_4F6C_DD1Du64;
+    (0..1024)
+        .map(|k| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let f = (x % 32) as u8;
+            let crate_address = if k % 3 == 0 {
+                7
+            } else {
+                1 + (x >> 8) as u8 % 62
+            };
+            match k % 4 {
+                0 | 1 => Message::Command {
+                    crate_address,
+                    station: (x >> 16) as u8 % 32,
+                    subaddress: (x >> 24) as u8 % 16,
+                    function: f,
+                    data: (16..=23)
+                        .contains(&f)
+                        .then_some((x >> 32) as u32 & 0xFF_FFFF),
+                },
+                2 => Message::Reply {
+                    crate_address,
+                    status: Status::from_bits((x >> 40) as u8),
+                    data: (x & 1 == 0).then_some((x >> 12) as u32 & 0xFF_FFFF),
+                },
+                _ => Message::Demand {
+                    crate_address,
+                    sgl: (x >> 20) as u8 % 32,
+                },
+            }
+        })
+        .collect()
+}
+
+/// The messages' bytes back to back, and each message's length.
+#[must_use]
+pub fn encoded(messages: &[Message]) -> (Vec<u8>, Vec<usize>) {
+    let mut bytes = Vec::new();
+    let mut lens = Vec::new();
+    let mut buf = [0u8; MAX_MESSAGE];
+    for m in messages {
+        let len = m.encode(&mut buf).unwrap_or(0);
+        bytes.extend_from_slice(&buf[..len]);
+        lens.push(len);
+    }
+    (bytes, lens)
+}
+
+/// A crate of 32 registers, one per station.
+pub struct Registers(pub [u32; 32]);
+
+impl Dataway for Registers {
+    fn cycle(&mut self, n: u8, _a: u8, f: u8, write: Option<u32>) -> Cycle {
+        let reg = &mut self.0[usize::from(n & 31)];
+        if let Some(w) = write {
+            *reg = w;
+        }
+        Cycle {
+            read: *reg,
+            x: true,
+            q: f < 8,
+        }
+    }
+}
+
+/// Encodes every message into `out`; returns the bytes written.
+pub fn encode_all(messages: &[Message], out: &mut [u8]) -> usize {
+    let mut at = 0;
+    for m in messages {
+        at += m.encode(&mut out[at..]).unwrap_or(0);
+    }
+    at
+}
+
+/// Decodes every message; returns how many decoded.
+#[must_use]
+pub fn decode_all(bytes: &[u8], lens: &[usize]) -> usize {
+    let mut at = 0;
+    let mut ok = 0;
+    for &len in lens {
+        ok += usize::from(decode(&bytes[at..at + len]).is_ok());
+        at += len;
+    }
+    ok
+}
+
+/// Copies every message's bytes, message by message: the practical limit of any codec.
+pub fn copy_all(bytes: &[u8], lens: &[usize], out: &mut [u8]) -> usize {
+    let mut at = 0;
+    for &len in lens {
+        out[at..at + len].copy_from_slice(&bytes[at..at + len]);
+        at += len;
+    }
+    at
+}
+
+/// Runs `rounds` passes of `which` (`encode`, `decode`, `copy`, `controller`, `delay`) over the
+/// workload and returns a checksum, or `None` for an unknown `which`.
+#[must_use]
+pub fn run(which: &str, rounds: u64) -> Option<u64> {
+    let messages = workload();
+    let (bytes, lens) = encoded(&messages);
+    let mut out = vec![0u8; bytes.len()];
+    let mut sum = 0u64;
+    let mut controller = Controller::new(ControllerConfig {
+        address: 7,
+        demand_repeat: 0,
+    })
+    .ok()?;
+    let mut crate_ = Registers([0; 32]);
+    for _ in 0..rounds {
+        sum += match which {
+            "encode" => encode_all(std::hint::black_box(&messages), &mut out) as u64,
+            "decode" => decode_all(std::hint::black_box(&bytes), &lens) as u64,
+            "copy" => copy_all(std::hint::black_box(&bytes), &lens, &mut out) as u64,
+            "controller" => {
+                for (o, &i) in out.iter_mut().zip(std::hint::black_box(&bytes)) {
+                    *o = controller.clock(i, &mut crate_);
+                }
+                u64::from(out[0])
+            }
+            _ => return None,
+        };
+    }
+    Some(sum)
+}
