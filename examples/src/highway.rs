@@ -877,4 +877,142 @@ pub mod ports {
             seconds,
         })
     }
+
+    /// What the panel link over the ports gave.
+    #[derive(Clone, Debug, Serialize)]
+    pub struct PanelSummary {
+        /// The host's port.
+        pub host_port: String,
+        /// The panel's port.
+        pub panel_port: String,
+        /// Keys pressed at the panel.
+        pub keys_pressed: Vec<u8>,
+        /// Keys the host took, in order.
+        pub keys_delivered: Vec<u8>,
+        /// Register sequences the host sent.
+        pub sequences: u64,
+        /// The panel shows the host's registers at the end.
+        pub registers_match: bool,
+        /// Wall-clock seconds.
+        pub seconds: f64,
+    }
+
+    /// The 1977 panel link over two real ports: the host (29 registers, updated every 50 ms as
+    /// in the source) on one, a panel on the other, its operator pressing `keys` 100 ms apart.
+    /// Data bytes go over the ports at the source's 4800-baud pace (one per 2.3 ms); MOT and
+    /// SÄN, separate wires in the source, are two shared flags here (a pty pair has no modem
+    /// lines; on a real port they map to RTS/CTS).
+    ///
+    /// # Errors
+    /// A port that cannot be opened or fails.
+    pub fn run_panel(
+        host_port: &str,
+        panel_port: &str,
+        keys: &[u8],
+    ) -> Result<PanelSummary, String> {
+        use regler_panel_link::io::{host_transmit, panel_receive, read_byte, write_byte};
+        use regler_panel_link::panel::{Host, HostConfig, HostEvent, LANE_PANEL, Panel};
+
+        let mut host_side = open(host_port, Duration::from_millis(1))?;
+        let mut panel_side = open(panel_port, Duration::from_millis(1))?;
+        let mot = Arc::new(AtomicBool::new(false));
+        let san = Arc::new(AtomicBool::new(false));
+        let stop = Arc::new(AtomicBool::new(false));
+        let (panel_mot, panel_san, panel_stop) =
+            (Arc::clone(&mot), Arc::clone(&san), Arc::clone(&stop));
+        let pressed = keys.to_vec();
+        let start = Instant::now();
+        let panel_thread = std::thread::spawn(move || -> Result<Panel<LANE_PANEL>, String> {
+            let mut panel: Panel<LANE_PANEL> = Panel::new();
+            let mut next_key = 0usize;
+            let mut next_tick = Duration::from_millis(20);
+            while !panel_stop.load(Ordering::Relaxed) {
+                match panel_receive(&mut panel_side, &mut panel) {
+                    Ok(()) | Err(IoError::Port(_)) => {} // a time-out: a quiet line
+                    Err(e) => return Err(format!("panel port: {e}")),
+                }
+                let now = start.elapsed();
+                if next_key < pressed.len()
+                    && now >= Duration::from_millis(100 * (next_key as u64 + 1))
+                    && panel.press(pressed[next_key]).is_ok()
+                {
+                    next_key += 1;
+                }
+                let mut send = panel.set_san(panel_san.load(Ordering::Relaxed));
+                if now >= next_tick {
+                    next_tick += Duration::from_millis(20);
+                    send = send.or(panel.tick_20ms());
+                }
+                if let Some(key) = send {
+                    write_byte(&mut panel_side, key).map_err(|e| format!("panel port: {e}"))?;
+                }
+                panel_mot.store(panel.mot(), Ordering::Relaxed);
+            }
+            Ok(panel)
+        });
+        let mut host: Host<LANE_PANEL> =
+            Host::new(HostConfig::default()).map_err(|e| e.to_string())?;
+        let mut delivered = Vec::new();
+        let byte_time = Duration::from_micros(11 * 1_000_000 / 4800);
+        let (mut next_byte, mut next_poll, mut next_update) =
+            (Duration::ZERO, Duration::ZERO, Duration::ZERO);
+        let mut update = 0u8;
+        let keys_done_by = Duration::from_millis(100 * (keys.len() as u64 + 1) + 500);
+        let mut settle_from: Option<u64> = None;
+        loop {
+            let now = start.elapsed();
+            // The display data, refreshed from the live lists every 50 ms — until the end.
+            if now >= next_update && now < keys_done_by {
+                next_update += Duration::from_millis(50);
+                update = update.wrapping_add(1);
+                for i in 0..LANE_PANEL {
+                    host.set(i, (update.wrapping_mul(7).wrapping_add(i as u8)) & 0x7F)
+                        .map_err(|e| e.to_string())?;
+                }
+            }
+            if now >= next_byte {
+                next_byte += byte_time;
+                host_transmit(&mut host_side, &mut host).map_err(|e| format!("host port: {e}"))?;
+            }
+            if now >= next_poll {
+                next_poll += Duration::from_millis(10);
+                host.poll_mot(mot.load(Ordering::Relaxed));
+                san.store(host.san(), Ordering::Relaxed);
+            }
+            match read_byte(&mut host_side) {
+                Ok(byte) => {
+                    if let Some(HostEvent::Key(key)) = host.receive(Ok(byte)) {
+                        delivered.push(key);
+                    }
+                    san.store(host.san(), Ordering::Relaxed);
+                }
+                Err(IoError::Port(_)) => {}
+                Err(e) => return Err(format!("host port: {e}")),
+            }
+            // After the last update: two more full sequences, then compare.
+            if now >= keys_done_by && !host.san() {
+                let base = *settle_from.get_or_insert(host.stats().sequences);
+                if host.stats().sequences >= base + 2 {
+                    break;
+                }
+            }
+            if now > keys_done_by + Duration::from_secs(10) {
+                return Err("the panel link did not settle within 10 s".into());
+            }
+        }
+        let seconds = start.elapsed().as_secs_f64();
+        stop.store(true, Ordering::Relaxed);
+        let panel = panel_thread
+            .join()
+            .map_err(|_| "panel thread panicked".to_string())??;
+        Ok(PanelSummary {
+            host_port: host_port.into(),
+            panel_port: panel_port.into(),
+            keys_pressed: keys.to_vec(),
+            keys_delivered: delivered,
+            sequences: host.stats().sequences,
+            registers_match: panel.registers() == host.registers(),
+            seconds,
+        })
+    }
 }

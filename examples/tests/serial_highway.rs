@@ -121,10 +121,8 @@ fn bad_arguments_are_errors_not_panics() {
     }
 }
 
-/// The driver and one crate over a real pseudo-terminal pair, through the `embedded-io` adapter
-/// and the `serialport` crate. Runs when `socat` is installed (`.ci/run` installs it).
-#[test]
-fn driver_and_crate_over_a_socat_pty_pair() {
+/// Runs the example over a fresh `socat` pty pair with `args`; `None` when socat is missing.
+fn over_a_pty_pair(args: &[&str]) -> Option<std::process::Output> {
     if Command::new("socat")
         .arg("-V")
         .stdout(Stdio::null())
@@ -132,11 +130,12 @@ fn driver_and_crate_over_a_socat_pty_pair() {
         .is_err()
     {
         eprintln!("socat not installed: skipping the serial-port test (.ci/run installs it)");
-        return;
+        return None;
     }
-    let dir = std::env::temp_dir().join(format!("regler-pty-{}", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("regler-pty-{}-{}", std::process::id(), args.len()));
     std::fs::create_dir_all(&dir).unwrap();
-    let (a, b) = (dir.join("driver"), dir.join("crate"));
+    let (a, b) = (dir.join("a"), dir.join("b"));
     let mut socat = Command::new("socat")
         .arg(format!("pty,raw,echo=0,link={}", a.display()))
         .arg(format!("pty,raw,echo=0,link={}", b.display()))
@@ -151,17 +150,20 @@ fn driver_and_crate_over_a_socat_pty_pair() {
         );
         std::thread::sleep(Duration::from_millis(20));
     }
-    let out = highway(&[
-        "--ports",
-        a.to_str().unwrap(),
-        b.to_str().unwrap(),
-        "--messages",
-        "200",
-        "--json",
-    ]);
+    let out = highway(&[&["--ports", a.to_str().unwrap(), b.to_str().unwrap()], args].concat());
     socat.kill().ok();
     socat.wait().ok();
     std::fs::remove_dir_all(&dir).ok();
+    Some(out)
+}
+
+/// The driver and one crate over a real pseudo-terminal pair, through the `embedded-io` adapter
+/// and the `serialport` crate. Runs when `socat` is installed (`.ci/run` installs it).
+#[test]
+fn driver_and_crate_over_a_socat_pty_pair() {
+    let Some(out) = over_a_pty_pair(&["--messages", "200", "--json"]) else {
+        return;
+    };
     assert!(
         out.status.success(),
         "{}",
@@ -171,6 +173,25 @@ fn driver_and_crate_over_a_socat_pty_pair() {
     assert_eq!(r["completed"], 200, "{r}");
     assert_eq!(r["failed"], 0, "{r}");
     assert_eq!(r["undetected_errors"], 0, "{r}");
+}
+
+/// The 1977 panel link over a real pseudo-terminal pair: every key once, in order; the panel
+/// shows the host's registers.
+#[test]
+fn panel_link_over_a_socat_pty_pair() {
+    let Some(out) = over_a_pty_pair(&["--panel", "--json", "--seed", "5"]) else {
+        return;
+    };
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(r["keys_delivered"], r["keys_pressed"], "{r}");
+    assert_eq!(r["keys_pressed"].as_array().unwrap().len(), 5);
+    assert_eq!(r["registers_match"], true, "{r}");
+    assert!(r["sequences"].as_u64().unwrap() >= 5, "{r}");
 }
 
 #[test]

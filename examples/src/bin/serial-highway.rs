@@ -60,6 +60,10 @@ struct Args {
     /// `socat -d -d pty,raw,echo=0 pty,raw,echo=0`): DRIVER_PORT CRATE_PORT.
     #[arg(long, num_args = 2, value_names = ["DRIVER_PORT", "CRATE_PORT"])]
     ports: Option<Vec<String>>,
+    /// With --ports: run the 1977 panel link (host and a 29-register panel) over the ports
+    /// instead of the highway.
+    #[arg(long, requires = "ports")]
+    panel: bool,
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
@@ -83,6 +87,32 @@ fn run(args: &Args) -> Result<(), String> {
         let [driver_port, crate_port] = ports.as_slice() else {
             return Err("--ports needs two paths".into());
         };
+        if args.panel {
+            let keys: Vec<u8> = (0..5u64)
+                .map(|k| ((args.seed.wrapping_add(k) * 37) % 128) as u8)
+                .collect();
+            let summary = highway::ports::run_panel(driver_port, crate_port, &keys)?;
+            let text = if args.json {
+                serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?
+            } else {
+                format!(
+                    "panel link over real ports: host on {driver_port}, panel on {crate_port}\n  \
+                     keys pressed {:?}, delivered {:?}\n  \
+                     {} register sequences in {:.2} s; the panel shows the host's registers: {}",
+                    summary.keys_pressed,
+                    summary.keys_delivered,
+                    summary.sequences,
+                    summary.seconds,
+                    if summary.registers_match { "yes" } else { "NO" }
+                )
+            };
+            emit(&text)?;
+            return if summary.registers_match && summary.keys_delivered == summary.keys_pressed {
+                Ok(())
+            } else {
+                Err("the panel link over the ports lost or altered something".into())
+            };
+        }
         let summary = highway::ports::run(driver_port, crate_port, args.messages, args.seed)?;
         let text = if args.json {
             serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?
