@@ -412,14 +412,11 @@ impl Sim {
             .map_err(|e| e.to_string())?;
             crates.push((controller, SimCrate::new(config.lam_preset)));
         }
-        // One noise source per link (driver → crate 1, …, last crate → driver).
+        // One noise source per link (driver → crate 1, …, last crate → driver), each seeded from
+        // one generator so that no two links' streams are related.
+        let mut seeds = Noise::new(0.0, config.seed).map_err(|e| e.to_string())?;
         let links = (0..=u64::from(config.crates))
-            .map(|k| {
-                Noise::new(
-                    config.ber,
-                    config.seed ^ (k + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15),
-                )
-            })
+            .map(|_| Noise::new(config.ber, seeds.next_u64()))
             .collect::<Result<Vec<_>, _>>()
             .map_err(|e| e.to_string())?;
         let driver = Driver::new(DriverConfig {
@@ -434,7 +431,7 @@ impl Sim {
             })
             .collect();
         Ok(Self {
-            rng: Noise::new(0.0, config.seed).map_err(|e| e.to_string())?,
+            rng: Noise::new(0.0, seeds.next_u64()).map_err(|e| e.to_string())?,
             issued: vec![None; usize::from(config.crates) + 1],
             config,
             driver,

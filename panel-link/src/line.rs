@@ -254,11 +254,17 @@ impl Noise {
             all_kept *= keep;
             *slot = to_threshold(1.0 - all_kept);
         }
-        Ok(Self {
-            state: seed,
+        // The seed is mixed first: SplitMix64 streams whose seeds differ by a multiple of its
+        // increment are shifted copies of each other, and links seeded `base ^ k·increment`
+        // would flip the same bit patterns into different bytes (correlated errors, which
+        // parity is not designed for).
+        let mut mixer = Self {
+            state: seed ^ 0x6A09_E667_F3BC_C909,
             first,
             flips: 0,
-        })
+        };
+        mixer.state = mixer.next_u64();
+        Ok(mixer)
     }
 
     /// The next 64 random bits (SplitMix64).
@@ -396,6 +402,27 @@ mod tests {
             per_bit.iter().all(|&c| (7500..8500).contains(&c)),
             "{per_bit:?}"
         );
+    }
+
+    #[test]
+    fn related_seeds_give_unrelated_streams() {
+        // SplitMix64 seeded s and s + increment would be the same stream shifted by one step;
+        // the mixing in `new` must break that (it once made links flip the same patterns).
+        let gamma = 0x9E37_79B9_7F4A_7C15u64;
+        for base in [0u64, 1, 1976, u64::MAX] {
+            let mut a = Noise::new(0.0, base).unwrap();
+            let mut b = Noise::new(0.0, base.wrapping_add(gamma)).unwrap();
+            let mut c = Noise::new(0.0, base ^ gamma).unwrap();
+            let sa: Vec<u64> = (0..64).map(|_| a.next_u64()).collect();
+            let sb: Vec<u64> = (0..64).map(|_| b.next_u64()).collect();
+            let sc: Vec<u64> = (0..64).map(|_| c.next_u64()).collect();
+            for shift in 0..8 {
+                assert_ne!(sa[shift..shift + 32], sb[..32]);
+                assert_ne!(sb[shift..shift + 32], sa[..32]);
+                assert_ne!(sa[shift..shift + 32], sc[..32]);
+                assert_ne!(sc[shift..shift + 32], sa[..32]);
+            }
+        }
     }
 
     #[test]
