@@ -190,7 +190,9 @@ struct Slot {
 /// takes the byte arriving from the last crate and gives the byte to send, and at most one
 /// [`DriverEvent`]. A reply is matched to the command outstanding for its crate; a reply with ERR,
 /// a command that came back unanswered and a time-out send the command again, up to
-/// [`DriverConfig::retries`] times.
+/// [`DriverConfig::retries`] times. Execution is at least once: a reply lost on the way back
+/// means the command runs again (the highway has no sequence numbers), so a non-idempotent
+/// function such as read-and-clear can run twice; never, though, after its command completed.
 ///
 /// ```
 /// use regler_panel_link::highway::{Driver, DriverConfig, DriverEvent, Message};
