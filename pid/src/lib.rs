@@ -18,6 +18,7 @@ mod operator;
 mod real;
 mod scalar;
 mod scaling;
+pub mod tuning;
 
 pub use alarm::{Alarm, AlarmState};
 pub use config::{Action, Config, ConfigError, Kind, Parameter};

@@ -1,0 +1,300 @@
+//! The relay experiment on Åström and Hägglund's benchmark processes: the estimated ultimate gain
+//! and period against their analytic values; what noise, a silent process, a failing sensor and
+//! an abort do to it; the bumpless hand-over to the tuned controller.
+#![allow(
+    clippy::unwrap_used,
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::cast_possible_truncation,
+    reason = "a test may panic: that is how it fails"
+)]
+
+use std::collections::VecDeque;
+use std::f64::consts::PI;
+
+use regler_pid::tuning::{Relay, RelayConfig, RelayError, RelayStep, Ultimate, ziegler_nichols};
+use regler_pid::{Config, Kind, Mode, Pid};
+
+/// A sampled linear process: `n` equal first-order lags of time constant `t` after a dead time.
+struct Process {
+    lags: Vec<f64>,
+    a: f64,
+    delay: VecDeque<f64>,
+}
+
+impl Process {
+    fn new(n: usize, t: f64, dead_time: f64, h: f64) -> Self {
+        let steps = (dead_time / h).round() as usize;
+        Process {
+            lags: vec![0.0; n],
+            a: (-h / t).exp(),
+            delay: VecDeque::from(vec![0.0; steps]),
+        }
+    }
+
+    fn output(&self) -> f64 {
+        *self.lags.last().unwrap()
+    }
+
+    fn step(&mut self, u: f64) {
+        self.delay.push_back(u);
+        let mut input = self.delay.pop_front().unwrap();
+        for x in &mut self.lags {
+            *x = self.a * *x + (1.0 - self.a) * input;
+            input = *x;
+        }
+    }
+}
+
+/// 1/(s+1)^n: the phase is −π at ω = tan(π/n), where |G| = (1 + ω²)^(−n/2).
+fn lag_chain_ultimate(n: usize) -> Ultimate {
+    let w = (PI / n as f64).tan();
+    Ultimate {
+        ku: (1.0 + w * w).powf(n as f64 / 2.0),
+        tu: 2.0 * PI / w,
+    }
+}
+
+/// e^(−s)/(1 + sT): the phase is −π where ω + atan(ωT) = π (bisection).
+fn dead_time_ultimate(t: f64) -> Ultimate {
+    let (mut lo, mut hi) = (0.0, PI);
+    for _ in 0..200 {
+        let w = 0.5 * (lo + hi);
+        if w + (w * t).atan() < PI {
+            lo = w
+        } else {
+            hi = w
+        }
+    }
+    let w = 0.5 * (lo + hi);
+    Ultimate {
+        ku: (1.0 + w * w * t * t).sqrt(),
+        tu: 2.0 * PI / w,
+    }
+}
+
+fn run(
+    process: &mut Process,
+    relay: &mut Relay,
+    noise: impl Fn(usize) -> f64,
+) -> Result<Ultimate, RelayError> {
+    let mut k = 0;
+    loop {
+        let y = process.output() + noise(k);
+        k += 1;
+        match relay.update(0.0, y)? {
+            RelayStep::Running(u) => process.step(u),
+            RelayStep::Done(found) => return Ok(found),
+        }
+    }
+}
+
+fn config(h: f64) -> RelayConfig {
+    RelayConfig {
+        h,
+        hysteresis: 0.002,
+        timeout: 2_000.0,
+        ..RelayConfig::default()
+    }
+}
+
+#[test]
+fn relay_recovers_the_ultimate_point_of_the_benchmark_processes() {
+    let h = 0.005;
+    let mut cases: Vec<(String, Process, Ultimate)> = Vec::new();
+    for n in [3usize, 4, 8] {
+        cases.push((
+            format!("1/(s+1)^{n}"),
+            Process::new(n, 1.0, 0.0, h),
+            lag_chain_ultimate(n),
+        ));
+    }
+    for t in [0.1, 0.5, 1.0, 2.0, 10.0] {
+        cases.push((
+            format!("e^-s/(1+{t}s)"),
+            Process::new(1, t, 1.0, h),
+            dead_time_ultimate(t),
+        ));
+    }
+    for (name, mut process, truth) in cases {
+        let mut relay = Relay::new(config(h)).unwrap();
+        let found = run(&mut process, &mut relay, |_| 0.0).unwrap();
+        let ku_err = found.ku / truth.ku - 1.0;
+        let tu_err = found.tu / truth.tu - 1.0;
+        println!(
+            "{name}: Ku {:.3} (true {:.3}, {:+.1} %), Tu {:.3} (true {:.3}, {:+.1} %)",
+            found.ku,
+            truth.ku,
+            100.0 * ku_err,
+            found.tu,
+            truth.tu,
+            100.0 * tu_err
+        );
+        // The describing function keeps only the fundamental: close for lag chains (their output
+        // is nearly sinusoidal), high for dead-time-dominated processes, whose output is nearly
+        // the relay's square wave (pure dead time: 4/π ≈ 1.27 × the true Ku).
+        let ku_band = if name.starts_with("1/") {
+            -0.05..=0.01
+        } else {
+            -0.25..=0.30
+        };
+        assert!(
+            ku_band.contains(&ku_err),
+            "{name}: Ku {} vs {}",
+            found.ku,
+            truth.ku
+        );
+        assert!(
+            tu_err.abs() <= 0.05,
+            "{name}: Tu {} vs {}",
+            found.tu,
+            truth.tu
+        );
+    }
+}
+
+#[test]
+fn noise_below_the_hysteresis_is_harmless_and_above_it_is_named() {
+    let h = 0.01;
+    // Deterministic pseudo-noise of peak 0.01.
+    let noise = |k: usize| 0.01 * ((k as f64 * 12.9898).sin() * 43_758.545).fract();
+    let mut quiet = Relay::new(RelayConfig {
+        hysteresis: 0.02,
+        ..config(h)
+    })
+    .unwrap();
+    let found = run(&mut Process::new(3, 1.0, 0.0, h), &mut quiet, noise).unwrap();
+    // Noise widens the measured peak-to-peak and the hysteresis moves the cycle off −180°: both
+    // bias Ku low (a safe direction: lower gains), here by about a fifth.
+    assert!((-0.30..=0.0).contains(&(found.ku / 8.0 - 1.0)), "{found:?}");
+    assert!(
+        (found.tu / lag_chain_ultimate(3).tu - 1.0).abs() < 0.1,
+        "{found:?}"
+    );
+    let mut chattering = Relay::new(RelayConfig {
+        hysteresis: 0.0,
+        ..config(h)
+    })
+    .unwrap();
+    let err = run(&mut Process::new(3, 1.0, 0.0, h), &mut chattering, |k| {
+        if k % 2 == 0 { 0.05 } else { -0.05 }
+    });
+    assert!(matches!(err, Err(RelayError::Chattering { .. })), "{err:?}");
+    // The error stays: a failed experiment does not restart by itself.
+    assert!(chattering.update(0.0, 0.0).is_err());
+}
+
+#[test]
+fn a_process_that_never_answers_times_out() {
+    let h = 0.1;
+    // A disconnected actuator: the measurement never moves.
+    let mut dead = Relay::new(RelayConfig {
+        timeout: 60.0,
+        ..config(h)
+    })
+    .unwrap();
+    let mut out = Ok(());
+    for _ in 0..1000 {
+        if let Err(e) = dead.update(0.0, 0.0) {
+            out = Err(e);
+            break;
+        }
+    }
+    assert_eq!(out, Err(RelayError::Timeout { periods: 0 }));
+    // A first-order process without dead time has no ultimate point: the relay switches every
+    // sample or two, which the experiment names instead of reporting a meaningless Ku.
+    let mut relay = Relay::new(RelayConfig {
+        timeout: 60.0,
+        ..config(h)
+    })
+    .unwrap();
+    let err = run(&mut Process::new(1, 1.0, 0.0, h), &mut relay, |_| 0.0);
+    assert!(matches!(err, Err(RelayError::Chattering { .. })), "{err:?}");
+}
+
+#[test]
+fn a_failing_sensor_only_pauses_the_experiment_and_abort_returns_the_bias() {
+    let h = 0.01;
+    let mut process = Process::new(3, 1.0, 0.0, h);
+    let mut relay = Relay::new(RelayConfig {
+        bias: 2.0,
+        ..config(h)
+    })
+    .unwrap();
+    let mut found = None;
+    for k in 0..200_000 {
+        // The sensor drops out for 20 samples in every 2 000 (a period is about 360).
+        let y = if k % 2_000 < 20 {
+            f64::NAN
+        } else {
+            process.output()
+        };
+        match relay.update(0.0, y).unwrap() {
+            RelayStep::Running(u) => {
+                assert!(u == 1.0 || u == 3.0, "{u}");
+                process.step(u - 2.0);
+            }
+            RelayStep::Done(u) => {
+                found = Some(u);
+                break;
+            }
+        }
+    }
+    let found = found.expect("the experiment finished");
+    assert!((found.ku / 8.0 - 1.0).abs() < 0.15, "{found:?}");
+    let mut relay = Relay::new(RelayConfig {
+        bias: 2.0,
+        ..config(h)
+    })
+    .unwrap();
+    relay.update(0.0, 0.0).unwrap();
+    assert_eq!(relay.abort(), 2.0);
+    assert_eq!(relay.output(), 2.0);
+    assert_eq!(relay.update(0.0, 0.0), Err(RelayError::Aborted));
+}
+
+#[test]
+fn hand_over_is_bumpless_and_the_tuned_loop_settles() {
+    let h = 0.01;
+    let bias = 0.5;
+    let mut process = Process::new(3, 1.0, 0.0, h);
+    // Steady at the bias first: y = 0.5.
+    for _ in 0..5_000 {
+        process.step(bias);
+    }
+    let setpoint = process.output();
+    let mut relay = Relay::new(RelayConfig {
+        bias,
+        amplitude: 0.2,
+        ..config(h)
+    })
+    .unwrap();
+    let ultimate = loop {
+        match relay.update(setpoint, process.output()).unwrap() {
+            RelayStep::Running(u) => process.step(u),
+            RelayStep::Done(u) => break u,
+        }
+    };
+    let tuning = ziegler_nichols(ultimate, Kind::PI).unwrap();
+    let mut config = Config::<f64> {
+        h,
+        ymin: 0.0,
+        ymax: 1.0,
+        n: 10.0,
+        ..Config::default()
+    };
+    tuning.apply(&mut config).unwrap();
+    let mut pid: Pid<f64> = relay
+        .hand_over(&config, setpoint, process.output())
+        .unwrap();
+    assert_eq!(pid.mode(), Mode::Auto);
+    let first = pid.update(setpoint, process.output());
+    // Bumpless: the first output continues from the bias (up to one sample of P and I).
+    assert!((first - bias).abs() < 0.05, "{first}");
+    let mut y = process.output();
+    for _ in 0..6_000 {
+        process.step(pid.update(setpoint, y));
+        y = process.output();
+    }
+    assert!((y - setpoint).abs() < 1e-3, "{y} vs {setpoint}");
+}
