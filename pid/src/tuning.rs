@@ -12,6 +12,8 @@
 //! - Rules: [`ziegler_nichols`] (classic, from Ku and Tu), [`amigo`] (Åström–Hägglund's AMIGO,
 //!   from a first-order-plus-dead-time model), [`simc`] (Skogestad's SIMC, from the same model).
 //!   Each gives a [`Tuning`] that [`Tuning::apply`] writes into a [`Config`].
+//! - [`identify_step`]: a first-order-plus-dead-time model from a logged step response (method
+//!   of areas), for the model-based rules.
 //!
 //! # How close the relay gets
 //! The estimate rests on the describing function, which keeps only the fundamental of the
@@ -240,6 +242,167 @@ pub fn simc<F: Real>(model: Fopdt<F>, tc: F) -> Result<Tuning<F>, RuleError> {
         ti,
         td: F::zero(),
         b: F::one(),
+    })
+}
+
+/// Why a step response could not be turned into a model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum IdentifyError<F = f64> {
+    /// Fewer than 20 samples.
+    TooFewSamples(usize),
+    /// The sample period or the step size is not finite and non-zero.
+    Input(&'static str),
+    /// A sample is not finite (at this index).
+    NotFinite(usize),
+    /// The response has not settled: its last tenth still moves by this fraction of the change.
+    NotSettled(F),
+    /// The process did not respond (its change is below the samples' own spread).
+    NoResponse,
+    /// The response is not of the first-order-plus-dead-time kind (the fitted time constant or
+    /// dead time came out negative: e.g. an overshooting or inverse response).
+    NotFopdt,
+}
+
+impl<F: fmt::Display> fmt::Display for IdentifyError<F> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::TooFewSamples(n) => write!(f, "{n} samples: at least 20 are needed"),
+            Self::Input(what) => write!(f, "{what} must be finite and non-zero"),
+            Self::NotFinite(k) => write!(f, "sample {k} is not finite"),
+            Self::NotSettled(moving) => {
+                write!(
+                    f,
+                    "the response has not settled (its last tenth still moves by {moving} of the change): log longer"
+                )
+            }
+            Self::NoResponse => f.write_str("the process did not respond to the step"),
+            Self::NotFopdt => {
+                f.write_str("the response does not fit a first-order-plus-dead-time model")
+            }
+        }
+    }
+}
+
+impl<F: fmt::Debug + fmt::Display> core::error::Error for IdentifyError<F> {}
+
+/// A first-order-plus-dead-time model from a logged open-loop step response, by the method of
+/// areas (Åström & Hägglund): with s(t) the response per unit step, K = s(∞),
+/// A0 = ∫(K − s) dt = K·(T + L) and A1 = ∫₀^(T+L) s dt = K·T/e, so T = e·A1/K and
+/// L = A0/K − T. Areas average over many samples, so the method tolerates noise far better than
+/// reading two crossing times off the curve; for an FOPDT process it is exact up to the sampling.
+///
+/// `samples[0]` is the measurement at the instant of the step (the baseline), one sample every
+/// `h` seconds after it, long enough to settle; `step` is the change of the controller output.
+/// The final value is the mean of the last tenth.
+///
+/// ```
+/// use regler_pid::tuning::identify_step;
+///
+/// // 2·e^(−1.5s)/(1 + 5s), a step of 0.5, sampled every 0.1 s for 60 s.
+/// let y: Vec<f64> = (0..=600)
+///     .map(|k| {
+///         let t = k as f64 * 0.1;
+///         if t < 1.5 { 10.0 } else { 10.0 + 2.0 * 0.5 * (1.0 - (-(t - 1.5) / 5.0).exp()) }
+///     })
+///     .collect();
+/// let model = identify_step(&y, 0.1, 0.5)?;
+/// assert!((model.gain - 2.0).abs() < 0.01);
+/// assert!((model.time_constant - 5.0).abs() < 0.1);
+/// assert!((model.dead_time - 1.5).abs() < 0.1);
+/// # Ok::<(), regler_pid::tuning::IdentifyError>(())
+/// ```
+///
+/// # Errors
+/// See [`IdentifyError`].
+pub fn identify_step<F: Real>(samples: &[F], h: F, step: F) -> Result<Fopdt<F>, IdentifyError<F>> {
+    let n = samples.len();
+    if n < 20 {
+        return Err(IdentifyError::TooFewSamples(n));
+    }
+    if !(h.is_finite() && h > F::zero()) {
+        return Err(IdentifyError::Input("the sample period"));
+    }
+    if !(step.is_finite() && step != F::zero()) {
+        return Err(IdentifyError::Input("the step"));
+    }
+    if let Some(k) = samples.iter().position(|v| !v.is_finite()) {
+        return Err(IdentifyError::NotFinite(k));
+    }
+    let y0 = samples.first().copied().unwrap_or_else(F::zero);
+    let tail_len = (n / 10).max(2);
+    let tail = samples.get(n.saturating_sub(tail_len)..).unwrap_or(&[]);
+    let mut sum = F::zero();
+    let (mut lo, mut hi) = (F::infinity(), F::neg_infinity());
+    for &v in tail {
+        sum = sum + v;
+        lo = if v < lo { v } else { lo };
+        hi = if v > hi { v } else { hi };
+    }
+    let count = F::from_u16(u16::try_from(tail.len()).unwrap_or(u16::MAX));
+    let y_final = sum / count;
+    let change = y_final - y0;
+    if change.abs() <= (hi - lo) || change == F::zero() {
+        return Err(IdentifyError::NoResponse);
+    }
+    // Settled: the tail's first and last thirds agree to 2 % of the change.
+    let third = (tail.len() / 3).max(1);
+    let mean = |part: &[F]| {
+        let mut s = F::zero();
+        for &v in part {
+            s = s + v;
+        }
+        s / F::from_u16(u16::try_from(part.len().max(1)).unwrap_or(u16::MAX))
+    };
+    let early = mean(tail.get(..third).unwrap_or(&[]));
+    let late = mean(tail.get(tail.len().saturating_sub(third)..).unwrap_or(&[]));
+    let moving = ((late - early) / change).abs();
+    if moving > c(0.02) {
+        return Err(IdentifyError::NotSettled(moving));
+    }
+    let k = change / step;
+    // Per-unit response s(t) = (y − y0)/step; areas by the trapezoidal rule.
+    let half = c::<F>(0.5);
+    let unit = |v: F| (v - y0) / step;
+    let mut a0 = F::zero();
+    for pair in samples.windows(2) {
+        if let [a, b] = pair {
+            a0 = a0 + (k - unit(*a) + k - unit(*b)) * half * h;
+        }
+    }
+    let t_ar = a0 / k; // T + L
+    let mut a1 = F::zero();
+    let mut t = F::zero();
+    for pair in samples.windows(2) {
+        if let [a, b] = pair {
+            if t + h <= t_ar {
+                a1 = a1 + (unit(*a) + unit(*b)) * half * h;
+            } else if t < t_ar {
+                // The last, partial interval: linear interpolation up to T + L.
+                let frac = (t_ar - t) / h;
+                let end = unit(*a) + (unit(*b) - unit(*a)) * frac;
+                a1 = a1 + (unit(*a) + end) * half * (t_ar - t);
+            }
+        }
+        t = t + h;
+    }
+    let e = F::from_f64_nearest(core::f64::consts::E);
+    let time_constant = e * a1 / k;
+    let dead_time = t_ar - time_constant;
+    // A dead time a little below zero is sampling error; clearly negative is another shape.
+    if time_constant.is_nan() || time_constant <= F::zero() || dead_time < -h {
+        return Err(IdentifyError::NotFopdt);
+    }
+    let dead_time = if dead_time > F::zero() {
+        dead_time
+    } else {
+        F::zero()
+    };
+    Ok(Fopdt {
+        gain: k,
+        time_constant,
+        dead_time,
     })
 }
 

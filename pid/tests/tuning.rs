@@ -298,3 +298,82 @@ fn hand_over_is_bumpless_and_the_tuned_loop_settles() {
     }
     assert!((y - setpoint).abs() < 1e-3, "{y} vs {setpoint}");
 }
+
+/// A logged open-loop step of `step` on `process`, from a baseline of 10, for `seconds`.
+fn step_log(
+    process: &mut Process,
+    h: f64,
+    step: f64,
+    seconds: f64,
+    noise: impl Fn(usize) -> f64,
+) -> Vec<f64> {
+    (0..=(seconds / h) as usize)
+        .map(|k| {
+            let y = 10.0 + process.output() + noise(k);
+            process.step(step);
+            y
+        })
+        .collect()
+}
+
+#[test]
+fn step_identification_recovers_fopdt_models_and_names_what_it_cannot_fit() {
+    use regler_pid::tuning::{IdentifyError, amigo, identify_step, simc};
+    let h = 0.05;
+    for (k, t, l) in [(2.0, 5.0, 1.5), (-0.5, 1.0, 3.0), (1.0, 20.0, 0.5)] {
+        let mut p = Process::new(1, t, l, h);
+        // Gain k: scale the step into the unit-gain process and the response back out.
+        let y: Vec<f64> = step_log(&mut p, h, 0.5, 10.0 * (t + l), |_| 0.0)
+            .iter()
+            .map(|v| 10.0 + (v - 10.0) * k)
+            .collect();
+        let m = identify_step(&y, h, 0.5).unwrap();
+        assert!((m.gain / k - 1.0).abs() < 0.01, "{m:?}");
+        assert!((m.time_constant / t - 1.0).abs() < 0.03, "{m:?}");
+        assert!((m.dead_time - l).abs() < 2.0 * h, "{m:?}");
+        // The model-based rules take it straight away.
+        assert!(amigo(m, Kind::PI).is_ok() && simc(m, m.dead_time.max(h)).is_ok());
+    }
+    // Noise of peak 2 % of the change: the areas average it out.
+    let noise = |k: usize| 0.02 * ((k as f64 * 78.233).sin() * 43_758.545).fract();
+    let mut p = Process::new(1, 5.0, 1.5, h);
+    let m = identify_step(&step_log(&mut p, h, 1.0, 80.0, noise), h, 1.0).unwrap();
+    assert!(
+        (m.gain - 1.0).abs() < 0.03
+            && (m.time_constant / 5.0 - 1.0).abs() < 0.1
+            && (m.dead_time - 1.5).abs() < 0.3,
+        "{m:?}"
+    );
+    // 1/(s+1)^3: T + L equals the sum of the time constants, 3.
+    let mut p = Process::new(3, 1.0, 0.0, h);
+    let m = identify_step(&step_log(&mut p, h, 1.0, 30.0, |_| 0.0), h, 1.0).unwrap();
+    assert!(
+        (m.time_constant + m.dead_time - 3.0).abs() < 0.05 && m.dead_time > 0.3,
+        "{m:?}"
+    );
+    // What it refuses, by name.
+    let mut p = Process::new(1, 5.0, 1.5, h);
+    let short = step_log(&mut p, h, 1.0, 5.0, |_| 0.0);
+    assert!(matches!(
+        identify_step(&short, h, 1.0),
+        Err(IdentifyError::NotSettled(_))
+    ));
+    assert_eq!(
+        identify_step(&[1.0; 10], h, 1.0),
+        Err(IdentifyError::TooFewSamples(10))
+    );
+    assert_eq!(
+        identify_step(&[1.0; 100], h, 1.0),
+        Err(IdentifyError::NoResponse)
+    );
+    let mut bad = step_log(&mut Process::new(1, 1.0, 0.0, h), h, 1.0, 20.0, |_| 0.0);
+    bad[40] = f64::NAN;
+    assert_eq!(
+        identify_step(&bad, h, 1.0),
+        Err(IdentifyError::NotFinite(40))
+    );
+    assert_eq!(
+        identify_step(&bad, h, 0.0),
+        Err(IdentifyError::Input("the step"))
+    );
+}
