@@ -11,6 +11,7 @@
     )
 )]
 
+pub mod actuator;
 mod alarm;
 mod config;
 mod controller;
