@@ -76,7 +76,7 @@ pub enum Drive<F = f64> {
 /// use regler_pid::actuator::{ActuatorConfig, Drive, ThreePoint};
 ///
 /// // A 60 s valve, 0.2 s minimum pulse, 0.5 % dead band, sampled every second.
-/// let config = ActuatorConfig { run_time: 60.0, min_pulse: 0.2, dead_band: 0.005, h: 1.0 };
+/// let config = ActuatorConfig { run_time: 60.0f64, min_pulse: 0.2, dead_band: 0.005, h: 1.0 };
 /// let mut valve = ThreePoint::new(config, 0.0)?;
 /// assert_eq!(valve.update(0.5)?, Drive::Open(1.0)); // far away: a whole sample
 /// for _ in 0..28 { valve.update(0.5)?; }
