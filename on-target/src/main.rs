@@ -59,6 +59,8 @@ const TESTS: &[Test] = &[
         pid::f64_matches_hand_computed_steps,
     ),
     ("pid::fixed_point_follows_f32", pid::fixed_point_follows_f32),
+    ("pid::relay_autotune_in_f32", pid::relay_autotune_in_f32),
+    ("pid::three_point_actuator", pid::three_point_actuator),
     (
         "pid::config_errors_name_the_parameter",
         pid::config_errors_name_the_parameter,

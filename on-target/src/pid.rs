@@ -242,3 +242,66 @@ pub fn staged_edits_say_what_was_wrong() -> Outcome {
     check!(!staged.edited());
     Ok(())
 }
+
+/// The relay experiment in f32 on the core: 1/(s+1)^3 (Ku = 8, Tu = 3.63 s), sampled at 20 ms,
+/// the lags stepped with a precomputed factor (no `exp` on the core).
+pub fn relay_autotune_in_f32() -> Outcome {
+    use regler_pid::tuning::{Relay, RelayConfig, RelayStep, ziegler_nichols};
+    let a = 0.980_198_7f32; // e^(-0.02)
+    let mut x = [0.0f32; 3];
+    let mut relay = Relay::new(RelayConfig::<f32> {
+        h: 0.02,
+        hysteresis: 0.002,
+        timeout: 300.0,
+        ..RelayConfig::default()
+    })
+    .map_err(|_| "relay config")?;
+    let mut found = None;
+    for _ in 0..20_000 {
+        match relay.update(0.0, x[2]).map_err(|_| "relay failed")? {
+            RelayStep::Running(u) => {
+                x[0] = a * x[0] + (1.0 - a) * u;
+                x[1] = a * x[1] + (1.0 - a) * x[0];
+                x[2] = a * x[2] + (1.0 - a) * x[1];
+            }
+            RelayStep::Done(u) => {
+                found = Some(u);
+                break;
+            }
+        }
+    }
+    let u = found.ok_or("no estimate")?;
+    check!(u.ku > 7.2 && u.ku < 8.1);
+    check!(u.tu > 3.5 && u.tu < 3.8);
+    let t = ziegler_nichols(u, Kind::PI).map_err(|_| "rule")?;
+    let mut config = Config::<f32> {
+        h: 0.02,
+        ymax: 10.0,
+        ..Config::default()
+    };
+    t.apply(&mut config).map_err(|_| "apply")?;
+    check!(config.kind == Kind::PI && config.k > 3.0);
+    Ok(())
+}
+
+/// The three-point actuator: a position estimate that follows the pulses, no windup at the end.
+pub fn three_point_actuator() -> Outcome {
+    use regler_pid::actuator::{ActuatorConfig, Drive, ThreePoint};
+    let mut valve = ThreePoint::new(
+        ActuatorConfig::<f32> {
+            run_time: 60.0,
+            min_pulse: 0.2,
+            dead_band: 0.005,
+            h: 1.0,
+        },
+        0.5,
+    )
+    .map_err(|_| "config")?;
+    for _ in 0..100 {
+        valve.update_delta(0.1).map_err(|_| "delta")?;
+    }
+    check!(valve.position() == 1.0);
+    check!(matches!(valve.update_delta(-0.05), Ok(Drive::Close(s)) if s == 1.0));
+    check!(valve.update(f32::NAN).is_err());
+    Ok(())
+}

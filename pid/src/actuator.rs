@@ -224,10 +224,13 @@ impl<F: Real> ThreePoint<F> {
     }
 }
 
+/// `v` clamped into 0..=1, and snapped onto an end it is within rounding of (64 ulps): a run of
+/// pulses that adds up to the full stroke must read as the end, in `f32` too.
 fn clamp01<F: Real>(v: F) -> F {
-    if v < F::zero() {
+    let near = F::epsilon() * F::from_u16(64);
+    if v < near {
         F::zero()
-    } else if v > F::one() {
+    } else if v > F::one() - near {
         F::one()
     } else {
         v
