@@ -24,6 +24,7 @@
 //! - `night on|off`: the night input (set-back);
 //! - `outdoor DELTA`: a step in the outdoor temperature (room) or outflow (tank), in scale units.
 
+pub mod benchmark;
 pub mod keypad;
 pub mod terminal;
 

@@ -84,6 +84,11 @@ struct Args {
     /// No progress bar, and only the summary (not the operator's screen).
     #[arg(long, short)]
     quiet: bool,
+    /// Instead of the 1985 controller: tune automatically (relay → Ziegler–Nichols; step
+    /// response → AMIGO, SIMC) on Åström and Hägglund's benchmark processes and judge each
+    /// tuning (IAE for set-point and load steps, overshoot, Ms); a Markdown table, or --json.
+    #[arg(long)]
+    tuning_benchmark: bool,
 }
 
 fn main() -> ExitCode {
@@ -91,6 +96,21 @@ fn main() -> ExitCode {
 }
 
 fn run(args: &Args) -> Result<(), String> {
+    if args.tuning_benchmark {
+        let found = autonomous::benchmark::evaluate();
+        let text = if args.json {
+            serde_json::to_string_pretty(&found).map_err(|e| e.to_string())?
+        } else {
+            autonomous::benchmark::markdown(&found)
+        };
+        use std::io::Write;
+        return match writeln!(std::io::stdout().lock(), "{text}") {
+            Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+                Err(format!("cannot write: {e}"))
+            }
+            _ => Ok(()),
+        };
+    }
     let process = match args.process {
         ProcessArg::Room => ProcessKind::Room,
         ProcessArg::Tank => ProcessKind::Tank,
