@@ -394,3 +394,44 @@ fn json_trace_has_the_chosen_resolution() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("trace-every must be more than 0"));
     assert!(out.stdout.is_empty(), "no half-written JSON on an error");
 }
+
+/// `--autotune`: the relay experiment finds a limit cycle on both processes, the Ziegler–Nichols
+/// PI it gives takes over without a bump and settles a set-point step.
+#[test]
+fn autotune_on_the_simulated_processes() {
+    for process in ["room", "tank"] {
+        let r = json(&["--autotune", "--process", process]);
+        let ultimate = &r["ultimate"]["Ok"];
+        let (ku, tu) = (ultimate[0].as_f64().unwrap(), ultimate[1].as_f64().unwrap());
+        assert!(ku > 0.0 && tu > 0.0, "{r}");
+        assert!(
+            r["handover_jump_v"].as_f64().unwrap() < 0.1,
+            "{process}: bump at hand-over: {r}"
+        );
+        assert!(
+            r["settling_s"].as_f64().is_some(),
+            "{process}: the step never settled: {r}"
+        );
+        assert!(r["overshoot_pct"].as_f64().unwrap() < 60.0, "{r}");
+        // The trace shows the relay, then the controller.
+        let trace = r["trace"].as_array().unwrap();
+        assert!(trace.iter().any(|p| p[4] == true) && trace.iter().any(|p| p[4] == false));
+    }
+    // The room's dead time (2 min) and lag (30 min): a period of several minutes.
+    let room = json(&["--autotune", "--process", "room"]);
+    let tu = room["ultimate"]["Ok"][1].as_f64().unwrap();
+    assert!((300.0..1200.0).contains(&tu), "{tu}");
+    let out = controller(&[
+        "--autotune",
+        "--process",
+        "tank",
+        "--quiet",
+        "--svg",
+        "/dev/null",
+    ]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("Ziegler–Nichols PI") && text.contains("Tu ="),
+        "{text}"
+    );
+}

@@ -89,6 +89,11 @@ struct Args {
     /// tuning (IAE for set-point and load steps, overshoot, Ms); a Markdown table, or --json.
     #[arg(long)]
     tuning_benchmark: bool,
+    /// Instead of the 1985 controller: run the relay auto-tuning experiment on the simulated
+    /// process (--process), tune a PI by Ziegler–Nichols, hand over bumplessly and answer a
+    /// set-point step; the limit cycle and the step in the SVG.
+    #[arg(long)]
+    autotune: bool,
 }
 
 fn main() -> ExitCode {
@@ -96,6 +101,33 @@ fn main() -> ExitCode {
 }
 
 fn run(args: &Args) -> Result<(), String> {
+    if args.autotune {
+        let kind = match args.process {
+            ProcessArg::Room => ProcessKind::Room,
+            ProcessArg::Tank => ProcessKind::Tank,
+        };
+        let report = autonomous::autotune(kind, args.seed, args.outdoor_mean)?;
+        if !args.no_svg {
+            std::fs::write(&args.svg, autotune_picture(&report))
+                .map_err(|e| format!("cannot write {}: {e}", args.svg.display()))?;
+        }
+        let text = if args.json {
+            serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?
+        } else {
+            let mut text = autotune_summary(&report);
+            if !args.no_svg {
+                text.push_str(&format!("\nPicture: {}", args.svg.display()));
+            }
+            text
+        };
+        use std::io::Write;
+        return match writeln!(std::io::stdout().lock(), "{text}") {
+            Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+                Err(format!("cannot write: {e}"))
+            }
+            _ => Ok(()),
+        };
+    }
     if args.tuning_benchmark {
         let found = autonomous::benchmark::evaluate();
         let text = if args.json {
@@ -493,5 +525,89 @@ fn picture(r: &SimReport) -> String {
     format!(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"720\" height=\"{}\">\n{top}{middle}{bottom}</svg>\n",
         below + 420
+    )
+}
+
+fn autotune_summary(r: &autonomous::AutotuneReport) -> String {
+    let unit = match r.process {
+        ProcessKind::Room => "°C",
+        ProcessKind::Tank => "%",
+    };
+    match &r.ultimate {
+        Err(e) => format!(
+            "relay experiment on the {:?}: failed after {:.0} s: {e}",
+            r.process, r.experiment_s
+        ),
+        Ok((ku, tu)) => format!(
+            "relay experiment on the {:?}: output {:.1} ± {:.1} V, hysteresis {} {unit}\n  \
+             limit cycle after {:.0} s: Ku = {ku:.3} V/{unit}, Tu = {tu:.0} s\n  \
+             Ziegler–Nichols PI: K = {:.3} V/{unit}, Ti = {:.0} s; hand-over jump {:.3} V\n  \
+             set-point step of {} {unit}: overshoot {:.0} %, within 5 % after {}",
+            r.process,
+            r.bias_v,
+            r.relay_v,
+            r.hysteresis,
+            r.experiment_s,
+            r.k,
+            r.ti,
+            r.handover_jump_v,
+            r.step,
+            r.overshoot_pct,
+            r.settling_s
+                .map_or("never".to_string(), |s| format!("{s:.0} s")),
+        ),
+    }
+}
+
+fn autotune_picture(r: &autonomous::AutotuneReport) -> String {
+    let (scale, unit) = match r.process {
+        ProcessKind::Room => (60.0, "minutes"),
+        ProcessKind::Tank => (1.0, "seconds"),
+    };
+    let x = |t: f64| t / scale;
+    let marker = [x(r.experiment_s)];
+    let pick = |f: fn(&(f64, f64, f64, f64, bool)) -> f64| -> Vec<(f64, f64)> {
+        r.trace.iter().map(|p| (x(p.0), f(p))).collect()
+    };
+    let top = svg::line_chart_fitted(
+        "Relay experiment (limit cycle), then the tuned PI answering a set-point step",
+        unit,
+        match r.process {
+            ProcessKind::Room => "temperature (°C)",
+            ProcessKind::Tank => "level (%)",
+        },
+        &[
+            Series {
+                label: "set-point",
+                colour: "#2c3e50",
+                dashed: true,
+                points: pick(|p| p.1),
+            },
+            Series {
+                label: "measurement",
+                colour: "#c0392b",
+                dashed: false,
+                points: pick(|p| p.2),
+            },
+        ],
+        &marker,
+        "hand-over",
+    );
+    let bottom = svg::line_chart_marked(
+        "Output: relay, then PI",
+        unit,
+        "output (V)",
+        &[Series {
+            label: "output",
+            colour: "#2471a3",
+            dashed: false,
+            points: pick(|p| p.3),
+        }],
+        &marker,
+        "hand-over",
+    )
+    .replacen("<svg ", "<svg y=\"420\" ", 1);
+    format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"720\" height=\"840\">\n{top}{bottom}</svg>\n"
     )
 }
