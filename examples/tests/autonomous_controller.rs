@@ -435,3 +435,39 @@ fn autotune_on_the_simulated_processes() {
         "{text}"
     );
 }
+
+/// `--three-point GT`: an increase/decrease actuator instead of the 0–10 V output. A 60 s motor
+/// on the 30-minute room costs nearly nothing; a 600 s motor on the 30-second tank costs a lot;
+/// a run time out of range is refused.
+#[test]
+fn three_point_actuator_option() {
+    let iae = |args: &[&str]| json(args)["iae_unit_hours"].as_f64().unwrap();
+    let room = iae(&["--seed", "1", "--hours", "12", "--quiet"]);
+    let room_motor = iae(&[
+        "--seed",
+        "1",
+        "--hours",
+        "12",
+        "--quiet",
+        "--three-point",
+        "60",
+    ]);
+    assert!(
+        (room_motor / room - 1.0).abs() < 0.1,
+        "{room} vs {room_motor}"
+    );
+    let tank = iae(&["--process", "tank", "--hours", "1", "--quiet"]);
+    let tank_slow = iae(&[
+        "--process",
+        "tank",
+        "--hours",
+        "1",
+        "--quiet",
+        "--three-point",
+        "600",
+    ]);
+    assert!(tank_slow > 2.0 * tank, "{tank} vs {tank_slow}");
+    let out = controller(&["--three-point", "1", "--hours", "1", "--no-svg"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("three-point run time"));
+}

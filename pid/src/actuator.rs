@@ -9,9 +9,12 @@
 //! first request back moves the actuator at once. Requests smaller than the dead band or the
 //! minimum pulse wait and add up; an end-position switch re-anchors the estimate.
 //!
-//! With a positional [`Pid`](crate::Pid) whose output range is 0..1, feed the actuator's
-//! [`position`](ThreePoint::position) back as the controller's tracking input, so its integral
-//! follows what the motor really did while it runs at its speed limit.
+//! With a positional [`Pid`](crate::Pid), feed the *changes* of its output to
+//! [`update_delta`](ThreePoint::update_delta) (the velocity form): changes too small for a pulse
+//! add up in the driver and none is lost. Do not feed the driver's position estimate back as the
+//! controller's one-sample tracking input while a dead band is set: the controller could then
+//! never move more than one sample's integral step past the motor, and a step smaller than the
+//! dead band would never be driven — a deadlock (the `autonomous-controller` example hit it).
 #![allow(
     clippy::arithmetic_side_effects,
     reason = "arithmetic here is on Real (sealed: f32 or f64), which cannot panic or wrap; inputs are checked finite first"

@@ -672,6 +672,7 @@ pub struct Station<T, F = f64> {
     commits: u32,
     night: bool,
     feedforward: F,
+    track: Option<F>,
     refused: Option<ConfigError<F>>,
 }
 
@@ -695,6 +696,7 @@ impl<T: Scalar, F: Real> Station<T, F> {
             commits: 0,
             night: false,
             feedforward: F::zero(),
+            track: None,
             refused: None,
         })
     }
@@ -724,12 +726,12 @@ impl<T: Scalar, F: Real> Station<T, F> {
         self.xin = xin;
         let u = if xin.is_finite() {
             let (r, y) = (T::from_real(setpoint), T::from_real(xin));
-            if self.feedforward == F::zero() {
+            if self.feedforward == F::zero() && self.track.is_none() {
                 self.pid.update(r, y)
             } else {
                 let inputs = Inputs {
                     feedforward: T::from_real(self.feedforward),
-                    track: None,
+                    track: self.track.map(T::from_real),
                 };
                 self.pid.update_with(r, y, inputs)
             }
@@ -778,6 +780,14 @@ impl<T: Scalar, F: Real> Station<T, F> {
     /// A non-finite value is ignored and counts as 0.
     pub fn set_feedforward(&mut self, volts: F) {
         self.feedforward = if volts.is_finite() { volts } else { F::zero() };
+    }
+
+    /// The output the actuator really has, in volts, from the next sample on (`None`: the
+    /// controller's own) — a measured valve position, or the output an override selector chose —
+    /// so the integral tracks what the plant really gets and does not wind up while something
+    /// else is in charge. A non-finite value counts as `None`.
+    pub fn set_track(&mut self, volts: Option<F>) {
+        self.track = volts.filter(|v| v.is_finite());
     }
 
     /// The operator's acknowledge (key C).
@@ -1005,6 +1015,27 @@ mod tests {
         assert_eq!(st.sample(18.0), -0.5);
         st.set_feedforward(f64::NAN);
         assert_eq!(st.sample(18.0), -2.0);
+        // Tracking: a PI station whose actuator is stuck at 3 V follows it instead of winding up.
+        let pi = Parameters {
+            config: Config {
+                kind: Kind::PI,
+                k: 1.0,
+                ti: 1.0,
+                h: 1.0,
+                ymin: -100.0,
+                ymax: 100.0,
+                ..Config::default()
+            },
+            ..params
+        };
+        let mut st = Station::<f64>::new(pi, Scaling::new(0.0, 40.0).unwrap(), wide).unwrap();
+        st.set_track(Some(3.0));
+        for _ in 0..5 {
+            st.sample(20.0);
+        }
+        assert!((st.sample(20.0) - 3.0).abs() < 1e-9);
+        st.set_track(Some(f64::NAN)); // counts as no tracking
+        assert!((st.sample(20.0) - 3.0).abs() < 1e-9);
         let bad = Parameters {
             night_setback: -1.0,
             ..params

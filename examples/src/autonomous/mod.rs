@@ -286,6 +286,10 @@ pub struct SimConfig {
     pub outdoor_mean: f64,
     /// Seconds between trace points handed out (at least one sample period apart).
     pub trace_every_s: f64,
+    /// Drive an increase/decrease (three-point) actuator with this full-stroke run time GT,
+    /// seconds, instead of the 0–10 V output (the output then means the wanted position).
+    #[serde(default)]
+    pub three_point_s: Option<f64>,
     /// The timed inputs.
     #[serde(skip)]
     pub script: Vec<Event>,
@@ -590,6 +594,11 @@ pub fn autotune(kind: ProcessKind, seed: u64, outdoor_mean: f64) -> Result<Autot
 
 /// Checks the configuration and the script against what a plant can have.
 fn validate(config: &SimConfig) -> Result<(), String> {
+    if let Some(gt) = config.three_point_s {
+        if !(gt.is_finite() && (5.0..=3600.0).contains(&gt)) {
+            return Err(format!("three-point run time must be 5..=3600 s, got {gt}"));
+        }
+    }
     if !(config.hours.is_finite() && config.hours > 0.0 && config.hours <= 24.0 * 365.0) {
         return Err(format!(
             "hours must be more than 0 and at most 8760 (a year), got {}",
@@ -721,8 +730,79 @@ pub struct Sim {
     first: FirstStep,
     picture: Vec<TracePoint>,
     picture_stride: u64,
+    motor: Option<Motor>,
     /// Lines the operator saw.
     pub shown: Vec<Shown>,
+}
+
+/// A three-point actuator: the driver (with its position estimate) and the real motor.
+struct Motor {
+    driver: regler_pid::actuator::ThreePoint<f64>,
+    gt: f64,
+    h: f64,
+    /// Where the motor really is, 0..1.
+    position: f64,
+    /// Seconds of the current pulse still to run, and its direction.
+    pulse_left: f64,
+    opening: bool,
+    /// The controller output at the last sample (V).
+    last_u: f64,
+}
+
+impl Motor {
+    fn new(gt: f64, h: f64, position: f64) -> Result<Motor, String> {
+        use regler_pid::actuator::{ActuatorConfig, ThreePoint};
+        let config = ActuatorConfig {
+            run_time: gt,
+            min_pulse: 0.2f64.min(h),
+            dead_band: 0.005,
+            h,
+        };
+        let driver = ThreePoint::new(config, position).map_err(|e| e.to_string())?;
+        Ok(Motor {
+            driver,
+            gt,
+            h,
+            position,
+            pulse_left: 0.0,
+            opening: false,
+            last_u: 10.0 * position,
+        })
+    }
+
+    /// A new sample: the controller's output changed by `delta_volts` (10 V = the full stroke).
+    fn command(&mut self, delta_volts: f64, h: f64) {
+        use regler_pid::actuator::Drive;
+        if (h - self.h).abs() > 1e-9 {
+            // The operator changed the sample period: the longest pulse changes with it.
+            if let Ok(m) = Motor::new(self.gt, h, self.driver.position()) {
+                let (position, last_u) = (self.position, self.last_u);
+                *self = m;
+                (self.position, self.last_u) = (position, last_u);
+            }
+        }
+        match self.driver.update_delta(delta_volts / 10.0) {
+            Ok(Drive::Open(s)) => (self.pulse_left, self.opening) = (s, true),
+            Ok(Drive::Close(s)) => (self.pulse_left, self.opening) = (s, false),
+            _ => self.pulse_left = 0.0,
+        }
+    }
+
+    /// The motor runs for `dt` seconds (or what is left of the pulse); returns its output in
+    /// volts-equivalent (10 V = fully open).
+    fn run(&mut self, dt: f64) -> f64 {
+        let m = dt.min(self.pulse_left);
+        if m > 0.0 {
+            let moved = m / self.gt;
+            self.position = if self.opening {
+                (self.position + moved).min(1.0)
+            } else {
+                (self.position - moved).max(0.0)
+            };
+            self.pulse_left -= m;
+        }
+        10.0 * self.position
+    }
 }
 
 impl Sim {
@@ -752,6 +832,10 @@ impl Sim {
             first: FirstStep::default(),
             picture: Vec::new(),
             picture_stride: 1,
+            motor: match config.three_point_s {
+                Some(gt) => Some(Motor::new(gt, params.config.h, 0.0)?),
+                None => None,
+            },
             shown: Vec::new(),
         })
     }
@@ -799,6 +883,13 @@ impl Sim {
             self.u = Scaling::volts_to_dac(y)
                 .map(Scaling::dac_to_volts)
                 .unwrap_or(0.0);
+            if let Some(motor) = &mut self.motor {
+                // Velocity form: the motor integrates the controller's output changes; changes
+                // below a minimum pulse add up in the driver, none is lost.
+                let h = self.station.staged().active().config.h;
+                motor.command(self.u - motor.last_u, h);
+                motor.last_u = self.u;
+            }
             if self.station.commits() > before {
                 self.commits.push(t);
             }
@@ -827,7 +918,11 @@ impl Sim {
             self.keypad.show_status(&self.station);
         }
         self.iae += (self.station.setpoint() - self.plant.x).abs() * dt;
-        self.plant.step(t, self.u);
+        let applied = match &mut self.motor {
+            Some(motor) => motor.run(dt),
+            None => self.u,
+        };
+        self.plant.step(t, applied);
         self.step += 1;
     }
 
@@ -1023,6 +1118,7 @@ mod tests {
             outdoor_compensation: false,
             outdoor_mean: 0.0,
             trace_every_s: 60.0,
+            three_point_s: None,
             script: parse_script("0 term PID\n0 keys *").unwrap(),
         };
         assert!(

@@ -94,6 +94,10 @@ struct Args {
     /// set-point step; the limit cycle and the step in the SVG.
     #[arg(long)]
     autotune: bool,
+    /// Drive an increase/decrease (three-point) actuator with this full-stroke run time,
+    /// seconds, instead of the 0–10 V output.
+    #[arg(long, value_name = "SECONDS")]
+    three_point: Option<f64>,
 }
 
 fn main() -> ExitCode {
@@ -170,6 +174,7 @@ fn run(args: &Args) -> Result<(), String> {
         outdoor_compensation: args.outdoor_compensation,
         outdoor_mean: args.outdoor_mean,
         trace_every_s: args.trace_every,
+        three_point_s: args.three_point,
         script,
     };
     let report = if args.interactive {
