@@ -23,5 +23,33 @@ fn closed_loop(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, closed_loop);
+/// The fair loop: one generic loop function for both controllers, 1 000 samples of each shape
+/// per iteration (`regler_benches::pid_shapes`); subtract the `none` row (the loop's own work)
+/// to get a controller's time per update.
+fn shapes(c: &mut Criterion) {
+    use regler_benches::pid_shapes::{Null, Shape, anchor, regler, run};
+    for (name, shape) in [
+        ("constant", Shape::Constant),
+        ("steps", Shape::Steps),
+        ("noise", Shape::Noise),
+        ("saturation", Shape::Saturation),
+    ] {
+        let mut group = c.benchmark_group(format!("pid_shape_{name}_1000_samples"));
+        group.throughput(Throughput::Elements(1000));
+        let mut r = regler();
+        group.bench_function("regler_f32", |b| {
+            b.iter(|| run(&mut r, black_box(shape), 1000))
+        });
+        let mut p = anchor();
+        group.bench_function("pid_crate_f32", |b| {
+            b.iter(|| run(&mut p, black_box(shape), 1000))
+        });
+        group.bench_function("none", |b| {
+            b.iter(|| run(&mut Null, black_box(shape), 1000))
+        });
+        group.finish();
+    }
+}
+
+criterion_group!(benches, closed_loop, shapes);
 criterion_main!(benches);

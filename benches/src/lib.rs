@@ -6,5 +6,6 @@ pub mod dock;
 pub mod highway;
 pub mod naive_decode;
 pub mod pid_loop;
+pub mod pid_shapes;
 pub mod ring_pairs;
 pub mod scan;
