@@ -479,3 +479,29 @@ fn a_noisy_loop_never_lies() {
     assert!(submitted - completed - failed <= 4);
     assert!(failed * 100 < completed, "{failed} failed of {completed}");
 }
+
+proptest! {
+    /// A message for someone else with one byte's delimiter bit flipped (its parity then fails):
+    /// the controller whose address is the *next* byte's columns — the crate a phantom command
+    /// would reach — must not take the message's tail for a command of its own, whatever follows.
+    #[test]
+    fn a_flipped_delimiter_never_makes_a_phantom_command(
+        m in message(), at in any::<prop::sample::Index>(), next in message(),
+    ) {
+        let mut bytes = encode(&m);
+        let at = at.index(bytes.len() - 1); // a byte that has a successor in the message
+        bytes[at] ^= regler_panel_link::highway::DELIMITER;
+        let victim = bytes[at + 1] & regler_panel_link::highway::COLUMNS;
+        prop_assume!((1..=62).contains(&victim) && victim != m.crate_address());
+        let mut c = Controller::new(ControllerConfig { address: victim, demand_repeat: 0 }).unwrap();
+        let mut d = Recorder::default();
+        // Back to back with another message (not for the victim), then quiet.
+        let mut stream = bytes;
+        if next.crate_address() != victim {
+            stream.extend(encode(&next));
+        }
+        feed(&mut c, &mut d, &stream);
+        prop_assert_eq!(c.stats().commands, 0, "took a phantom command");
+        prop_assert!(d.cycles.is_empty());
+    }
+}

@@ -502,7 +502,7 @@ impl<const W: usize> Driver<W> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Controller, ControllerConfig, Cycle, Dataway};
+    use super::super::{Controller, ControllerConfig, Cycle, Dataway, MAX_MESSAGE};
     use super::*;
 
     struct Echo;
@@ -585,5 +585,84 @@ mod tests {
         );
         assert_eq!(d.stats().short_replies, 3);
         assert_eq!(d.outstanding(), 0);
+    }
+
+    /// An ERR reply may be the ghost of a damaged message while the real attempt is still on the
+    /// loop: the driver must not resend before the attempt's deadline, and the real reply that
+    /// follows still completes the command, once.
+    #[test]
+    fn an_err_reply_does_not_resend_before_the_deadline() {
+        let mut d: Driver<2> = Driver::new(DriverConfig {
+            timeout: 100,
+            retries: 3,
+            gap: 1,
+        });
+        let cmd = Message::Command {
+            crate_address: 2,
+            station: 1,
+            subaddress: 0,
+            function: 0,
+            data: None,
+        };
+        d.submit(cmd).unwrap();
+        let feed = |d: &mut Driver<2>, m: Message| {
+            let mut buf = [0u8; MAX_MESSAGE];
+            let len = m.encode(&mut buf).unwrap();
+            buf[..len]
+                .iter()
+                .map(|&b| d.clock(b).event)
+                .fold(None, |a, e| a.or(e))
+        };
+        for _ in 0..20 {
+            d.clock(WAIT);
+        }
+        assert_eq!(d.stats().sent, 1);
+        let ghost = Message::Reply {
+            crate_address: 2,
+            status: Status {
+                err: true,
+                ..Status::default()
+            },
+            data: None,
+        };
+        assert_eq!(feed(&mut d, ghost), None);
+        for _ in 0..20 {
+            assert_eq!(d.clock(WAIT).event, None);
+        }
+        assert_eq!(
+            d.stats().sent,
+            1,
+            "resent while the attempt could still be on the loop"
+        );
+        let real = Message::Reply {
+            crate_address: 2,
+            status: Status {
+                x: true,
+                q: true,
+                ..Status::default()
+            },
+            data: Some(7),
+        };
+        match feed(&mut d, real) {
+            Some(DriverEvent::Completed(c)) => assert_eq!((c.data, c.attempts), (Some(7), 1)),
+            other => panic!("{other:?}"),
+        }
+        // Without a good reply, the resend comes at the deadline, for the noted reason.
+        d.submit(cmd).unwrap();
+        for _ in 0..20 {
+            d.clock(WAIT);
+        }
+        feed(&mut d, ghost);
+        let mut clocks = 0;
+        while d.stats().sent < 3 {
+            assert_eq!(d.clock(WAIT).event, None);
+            clocks += 1;
+        }
+        assert!(clocks > 50, "resent after {clocks} clocks");
+        assert_eq!(
+            d.stats().timeouts,
+            0,
+            "an ERR-noted attempt is not a time-out"
+        );
     }
 }
