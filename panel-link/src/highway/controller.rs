@@ -6,13 +6,8 @@ use heapless::Deque;
 
 use super::{
     COLUMNS, END, M1, M2, NON_ADDRESSED, SPACE, STATION_MARK, WAIT, data_bytes, endsum_byte,
-    is_delimiter, is_read, is_write, row_parity_ok, with_parity,
+    is_clean_delimiter, is_delimiter, is_read, is_write, row_parity_ok, with_parity,
 };
-
-/// A delimiter with good row parity: only such a byte ends a message or makes a gap.
-const fn clean_delimiter(byte: u8) -> bool {
-    is_delimiter(byte) && row_parity_ok(byte)
-}
 
 /// What a CAMAC dataway cycle answered.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -289,7 +284,7 @@ impl Controller {
     fn take<D: Dataway + ?Sized>(&mut self, input: u8, dataway: &mut D) -> Option<u8> {
         match self.rx {
             Rx::Between => {
-                if clean_delimiter(input) {
+                if is_clean_delimiter(input) {
                     return None;
                 }
                 // A damaged delimiter is not trusted as a gap, nor as a header: what follows is
@@ -303,7 +298,7 @@ impl Controller {
                 Some(input)
             }
             Rx::Second { header } => {
-                if clean_delimiter(input) {
+                if is_clean_delimiter(input) {
                     // Header + END: a truncated command is answered at once by passing it on —
                     // it is itself the short reply.
                     self.rx = Rx::Between;
@@ -323,7 +318,7 @@ impl Controller {
                 }
             }
             Rx::Passing => {
-                if clean_delimiter(input) {
+                if is_clean_delimiter(input) {
                     self.rx = Rx::Between;
                 }
                 Some(input)
@@ -351,7 +346,7 @@ impl Controller {
     fn command_byte<D: Dataway + ?Sized>(&mut self, input: u8, dataway: &mut D) -> u8 {
         let pos = self.pos;
         self.pos = self.pos.saturating_add(1);
-        if clean_delimiter(input) {
+        if is_clean_delimiter(input) {
             // END: the command is over (early, if no reply was written yet).
             self.rx = Rx::Between;
             if !self.answered {

@@ -6,7 +6,7 @@ use heapless::Vec;
 
 use super::{
     DecodeError, EncodeError, MAX_DECODE, MAX_MESSAGE, Message, NON_ADDRESSED, Status, WAIT,
-    decode, is_delimiter, is_read, row_parity_ok,
+    decode, is_clean_delimiter, is_read,
 };
 
 /// How a [`Driver`] works the loop.
@@ -324,21 +324,16 @@ impl<const W: usize> Driver<W> {
                 return WAIT;
             }
             self.load_next();
-        }
-        let byte = self
-            .tx
-            .get(usize::from(self.tx_pos))
-            .copied()
-            .unwrap_or(WAIT);
-        if self.tx_pos < self.tx_len {
-            self.tx_pos = self.tx_pos.saturating_add(1);
-            if self.tx_pos == self.tx_len {
-                self.gap_left = self.config.gap;
+            if self.tx_pos >= self.tx_len {
+                return WAIT; // nothing to send
             }
-            byte
-        } else {
-            WAIT
         }
+        let byte = self.tx.get(usize::from(self.tx_pos)).copied().unwrap_or(WAIT);
+        self.tx_pos = self.tx_pos.saturating_add(1);
+        if self.tx_pos == self.tx_len {
+            self.gap_left = self.config.gap;
+        }
+        byte
     }
 
     fn load_next(&mut self) {
@@ -362,7 +357,7 @@ impl<const W: usize> Driver<W> {
     }
 
     fn receive(&mut self, input: u8) -> Option<DriverEvent> {
-        let clean_delimiter = is_delimiter(input) && row_parity_ok(input);
+        let clean_delimiter = is_clean_delimiter(input);
         if self.rx_len == 0 && clean_delimiter {
             return None; // gap
         }

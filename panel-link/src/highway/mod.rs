@@ -108,6 +108,15 @@ pub const fn is_delimiter(byte: u8) -> bool {
     byte & DELIMITER != 0
 }
 
+/// True when `byte` is a delimiter with good row parity. Only such a byte ends a message or
+/// makes a gap, in the crate controller and the driver alike: a byte whose delimiter bit was
+/// flipped in fails its parity, so the tail of a damaged message can never be taken for a new
+/// message.
+#[must_use]
+pub const fn is_clean_delimiter(byte: u8) -> bool {
+    is_delimiter(byte) && row_parity_ok(byte)
+}
+
 /// True for the CAMAC functions that carry write data in the command (F16–F23).
 #[must_use]
 pub const fn is_write(function: u8) -> bool {
