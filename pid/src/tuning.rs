@@ -545,9 +545,8 @@ pub struct Relay<F = f64> {
     y_min: F,
     periods: [(F, F); HISTORY],
     seen: u16,
-    done: Option<Ultimate<F>>,
-    failed: Option<RelayError<F>>,
-    aborted: bool,
+    /// How the experiment ended (an estimate, a failure or an abort), once it has.
+    outcome: Option<Result<Ultimate<F>, RelayError<F>>>,
 }
 
 impl<F: Real> Relay<F> {
@@ -591,16 +590,14 @@ impl<F: Real> Relay<F> {
             y_min: F::infinity(),
             periods: [(F::zero(), F::zero()); HISTORY],
             seen: 0,
-            done: None,
-            failed: None,
-            aborted: false,
+            outcome: None,
         })
     }
 
     /// The output the relay applies now.
     #[must_use]
     pub fn output(&self) -> F {
-        if self.done.is_some() || self.failed.is_some() || self.aborted {
+        if self.outcome.is_some() {
             return self.config.bias;
         }
         if self.high {
@@ -612,7 +609,7 @@ impl<F: Real> Relay<F> {
 
     /// Stops the experiment; the output goes back to the bias.
     pub fn abort(&mut self) -> F {
-        self.aborted = true;
+        self.outcome = Some(Err(RelayError::Aborted));
         self.config.bias
     }
 
@@ -625,20 +622,12 @@ impl<F: Real> Relay<F> {
     /// A failed experiment (time-out, chattering, amplitude below hysteresis) or one aborted.
     /// After an error the relay keeps returning it; make a new one to try again.
     pub fn update(&mut self, setpoint: F, measurement: F) -> Result<RelayStep<F>, RelayError<F>> {
-        if self.aborted {
-            return Err(RelayError::Aborted);
-        }
-        if let Some(done) = self.done {
-            return Ok(RelayStep::Done(done));
-        }
-        if let Some(failed) = self.failed {
-            return Err(failed);
+        if let Some(outcome) = self.outcome {
+            return outcome.map(RelayStep::Done);
         }
         self.now = self.now + self.config.h;
         if self.now > self.config.timeout {
-            let failed = RelayError::Timeout { periods: self.seen };
-            self.failed = Some(failed);
-            return Err(failed);
+            return self.end(Err(RelayError::Timeout { periods: self.seen }));
         }
         if !(measurement.is_finite() && setpoint.is_finite()) {
             return Ok(RelayStep::Running(self.output()));
@@ -657,18 +646,21 @@ impl<F: Real> Relay<F> {
         } else if !self.high && e > eps {
             self.high = true;
             match self.period_ended() {
-                Ok(Some(done)) => {
-                    self.done = Some(done);
-                    return Ok(RelayStep::Done(done));
-                }
                 Ok(None) => {}
-                Err(failed) => {
-                    self.failed = Some(failed);
-                    return Err(failed);
-                }
+                Ok(Some(done)) => return self.end(Ok(done)),
+                Err(failed) => return self.end(Err(failed)),
             }
         }
         Ok(RelayStep::Running(self.output()))
+    }
+
+    /// The experiment is over: remembered, so every later sample gives the same answer.
+    fn end(
+        &mut self,
+        outcome: Result<Ultimate<F>, RelayError<F>>,
+    ) -> Result<RelayStep<F>, RelayError<F>> {
+        self.outcome = Some(outcome);
+        outcome.map(RelayStep::Done)
     }
 
     /// A rise closes a period: record it and see whether the last ones agree.
@@ -726,8 +718,8 @@ impl<F: Real> Relay<F> {
 
     /// The estimate, once the experiment is done.
     #[must_use]
-    pub const fn result(&self) -> Option<Ultimate<F>> {
-        self.done
+    pub fn result(&self) -> Option<Ultimate<F>> {
+        self.outcome.and_then(Result::ok)
     }
 
     /// Hands the loop over to a controller configured by `config`, bumplessly: the controller

@@ -328,7 +328,11 @@ impl<const W: usize> Driver<W> {
                 return WAIT; // nothing to send
             }
         }
-        let byte = self.tx.get(usize::from(self.tx_pos)).copied().unwrap_or(WAIT);
+        let byte = self
+            .tx
+            .get(usize::from(self.tx_pos))
+            .copied()
+            .unwrap_or(WAIT);
         self.tx_pos = self.tx_pos.saturating_add(1);
         if self.tx_pos == self.tx_len {
             self.gap_left = self.config.gap;
