@@ -8,7 +8,7 @@
 //! crate and what each dataway cycle read. An **undetected error** is a cycle that ran a command
 //! the driver did not issue, or a completed command whose answer (data, X, Q) no run of it gave.
 
-use std::collections::BTreeMap;
+use std::collections::BTreeSet;
 
 use regler_panel_link::highway::{
     Controller, ControllerConfig, Cycle, Dataway, Driver, DriverConfig, DriverEvent, Message, WAIT,
@@ -126,6 +126,19 @@ impl Config {
 /// One dataway cycle as the crate ran it: (N, A, F, write data, read data, X, Q).
 pub type CycleRecord = (u8, u8, u8, Option<u32>, u32, bool, bool);
 
+/// A cycle a module took (X and Q set), nothing to read.
+const ACCEPTED: Cycle = Cycle {
+    read: 0,
+    x: true,
+    q: true,
+};
+/// No module answers this N·F: X and Q clear.
+const NO_MODULE: Cycle = Cycle {
+    read: 0,
+    x: false,
+    q: false,
+};
+
 /// The modules of one simulated crate.
 #[derive(Clone, Debug)]
 pub struct SimCrate {
@@ -167,72 +180,40 @@ impl Dataway for SimCrate {
                 match f {
                     0 => Cycle {
                         read: *reg,
-                        x: true,
-                        q: true,
+                        ..ACCEPTED
                     },
                     9 => {
                         *reg = 0;
-                        Cycle {
-                            read: 0,
-                            x: true,
-                            q: true,
-                        }
+                        ACCEPTED
                     }
                     16 => {
                         *reg = write.unwrap_or(0) & 0xFF_FFFF;
-                        Cycle {
-                            read: 0,
-                            x: true,
-                            q: true,
-                        }
+                        ACCEPTED
                     }
-                    _ => Cycle {
-                        read: 0,
-                        x: false,
-                        q: false,
-                    },
+                    _ => NO_MODULE,
                 }
             }
             (COUNTER_STATION, 0) => Cycle {
                 read: self.count,
-                x: true,
-                q: true,
+                ..ACCEPTED
             },
-            (COUNTER_STATION, 2) => {
-                let read = self.count;
-                self.count = 0;
-                Cycle {
-                    read,
-                    x: true,
-                    q: true,
-                }
-            }
+            (COUNTER_STATION, 2) => Cycle {
+                read: core::mem::take(&mut self.count),
+                ..ACCEPTED
+            },
             (COUNTER_STATION, 8) => Cycle {
-                read: 0,
-                x: true,
                 q: self.lam(),
+                ..ACCEPTED
             },
             (COUNTER_STATION, 24) => {
                 self.lam_enabled = false;
-                Cycle {
-                    read: 0,
-                    x: true,
-                    q: true,
-                }
+                ACCEPTED
             }
             (COUNTER_STATION, 26) => {
                 self.lam_enabled = true;
-                Cycle {
-                    read: 0,
-                    x: true,
-                    q: true,
-                }
+                ACCEPTED
             }
-            _ => Cycle {
-                read: 0,
-                x: false,
-                q: false,
-            },
+            _ => NO_MODULE,
         };
         let read = if is_read(f) {
             result.read & 0xFF_FFFF
@@ -321,12 +302,11 @@ pub struct Sim {
     issued: Vec<Option<Message>>,
     per_crate: Vec<CrateSummary>,
     /// Crates whose demand waits for a free slot.
-    demand_waiting: BTreeMap<u8, ()>,
+    demand_waiting: BTreeSet<u8>,
     line_in: u8,
     submitted: u64,
     done: u64,
-    undetected: u64,
-    undetected_kinds: Undetected,
+    undetected: Undetected,
     demands: u64,
     demands_served: u64,
     /// A scripted workload (run in order, over and over), or empty for the random one.
@@ -396,6 +376,14 @@ pub struct Undetected {
     pub phantom_demands: u64,
 }
 
+impl Undetected {
+    /// All of them.
+    #[must_use]
+    pub fn total(&self) -> u64 {
+        self.wrong_cycles + self.wrong_answers + self.phantom_demands
+    }
+}
+
 impl Sim {
     /// A highway with every crate idle.
     ///
@@ -438,12 +426,11 @@ impl Sim {
             crates,
             links,
             per_crate,
-            demand_waiting: BTreeMap::new(),
+            demand_waiting: BTreeSet::new(),
             line_in: WAIT,
             submitted: 0,
             done: 0,
-            undetected: 0,
-            undetected_kinds: Undetected::default(),
+            undetected: Undetected::default(),
             demands: 0,
             demands_served: 0,
             script: Vec::new(),
@@ -488,7 +475,7 @@ impl Sim {
         }
         let waiting: Option<u8> = self
             .demand_waiting
-            .keys()
+            .iter()
             .copied()
             .find(|&c| !self.driver.busy(c));
         if let Some(c) = waiting {
@@ -575,11 +562,11 @@ impl Sim {
         self.feed();
         let step = self.driver.clock(self.line_in);
         let mut byte = step.transmit;
-        let clocks = self.driver.stats().clocks;
+        let count_tick = self.driver.stats().clocks % u64::from(self.config.count_period) == 0;
         for k in 0..self.crates.len() {
             byte = self.carry(byte, k);
             let (controller, dataway) = &mut self.crates[k];
-            if clocks % u64::from(self.config.count_period) == 0 {
+            if count_tick {
                 dataway.count = (dataway.count + 1) & 0xFF_FFFF;
             }
             let before = dataway.log.len();
@@ -601,15 +588,7 @@ impl Sim {
                     _ => false,
                 };
                 if !ok {
-                    if std::env::var_os("HIGHWAY_DEBUG").is_some() {
-                        eprintln!(
-                            "wrong cycle at crate {address}, clock {clocks}: {:?}\n  issued {:?}",
-                            dataway.log.last(),
-                            self.issued[usize::from(address)]
-                        );
-                    }
-                    self.undetected += 1;
-                    self.undetected_kinds.wrong_cycles += 1;
+                    self.undetected.wrong_cycles += 1;
                 }
             }
         }
@@ -617,13 +596,8 @@ impl Sim {
         self.line_in = self.carry(byte, last);
         match step.event {
             Some(DriverEvent::Completed(done)) => self.completed(done),
-            Some(DriverEvent::Failed {
-                command, failure, ..
-            }) => {
+            Some(DriverEvent::Failed { command, .. }) => {
                 let address = command.crate_address();
-                if std::env::var_os("HIGHWAY_DEBUG").is_some() {
-                    eprintln!("failed at clock {clocks}: {command:?} {failure:?}");
-                }
                 self.per_crate[usize::from(address)].failed += 1;
                 self.done += 1;
             }
@@ -632,13 +606,10 @@ impl Sim {
                 match self.per_crate.get_mut(usize::from(crate_address)) {
                     Some(stats) if crate_address >= 1 => {
                         stats.demands += 1;
-                        self.demand_waiting.insert(crate_address, ());
+                        self.demand_waiting.insert(crate_address);
                     }
                     // A demand from a crate that is not on the loop: a damaged header got through.
-                    _ => {
-                        self.undetected += 1;
-                        self.undetected_kinds.phantom_demands += 1;
-                    }
+                    _ => self.undetected.phantom_demands += 1,
                 }
             }
             None => {}
@@ -659,11 +630,7 @@ impl Sim {
                 && e.6 == done.status.q
         });
         if !matches || self.issued[usize::from(address)] != Some(done.command) {
-            self.undetected += 1;
-            self.undetected_kinds.wrong_answers += 1;
-            if std::env::var_os("HIGHWAY_DEBUG").is_some() {
-                eprintln!("wrong answer: {done:?}\n  log {log:?}");
-            }
+            self.undetected.wrong_answers += 1;
         }
         if let Message::Command {
             station: COUNTER_STATION,
@@ -705,8 +672,8 @@ impl Sim {
             detected_at_crates: crates.iter().map(|c| c.detected_errors).sum(),
             timeouts: stats.timeouts,
             bits_flipped: self.links.iter().map(Noise::flips).sum(),
-            undetected_errors: self.undetected,
-            undetected: self.undetected_kinds,
+            undetected_errors: self.undetected.total(),
+            undetected: self.undetected,
             demands: self.demands,
             demands_served: self.demands_served,
             messages_per_s_byte_serial: if line_s_byte > 0.0 {
