@@ -158,9 +158,9 @@ pub struct Controller {
     data: u32,
     sum_at: u8,
     reply: [u8; 7],
+    /// The reply's length once the command is answered (at its first SPACE); 0 before.
     reply_len: u8,
     reply_sent: u8,
-    answered: bool,
     /// The last command had an error (reported as DERR in the next reply).
     last_error: bool,
     // Demands.
@@ -194,7 +194,6 @@ impl Controller {
             reply: [WAIT; 7],
             reply_len: 0,
             reply_sent: 0,
-            answered: false,
             last_error: false,
             last_sgl: 0,
             since_demand: 0,
@@ -340,7 +339,6 @@ impl Controller {
         self.sum_at = 4;
         self.reply_len = 0;
         self.reply_sent = 0;
-        self.answered = false;
     }
 
     fn command_byte<D: Dataway + ?Sized>(&mut self, input: u8, dataway: &mut D) -> u8 {
@@ -349,7 +347,7 @@ impl Controller {
         if is_clean_delimiter(input) {
             // END: the command is over (early, if no reply was written yet).
             self.rx = Rx::Between;
-            if !self.answered {
+            if self.reply_len == 0 {
                 self.stats.truncated = self.stats.truncated.saturating_add(1);
                 self.last_error = true;
             }
@@ -359,8 +357,9 @@ impl Controller {
             // A damaged delimiter: an error in the command, not its end.
             self.error = true;
         }
-        if self.answered {
-            // Reply room: the rest of the reply, then WAIT for any SPACE beyond it.
+        if self.reply_len != 0 {
+            // Answered (the reply has a length): the rest of the reply, then WAIT for any
+            // SPACE beyond it.
             if self.reply_sent < self.reply_len {
                 let byte = self
                     .reply
@@ -372,10 +371,8 @@ impl Controller {
             }
             return WAIT;
         }
-        if pos <= self.sum_at && !row_parity_ok(input) {
-            self.error = true;
-        }
         if pos <= self.sum_at {
+            self.error |= !row_parity_ok(input);
             self.columns ^= input & COLUMNS;
         }
         match pos {
@@ -414,7 +411,6 @@ impl Controller {
     }
 
     fn answer<D: Dataway + ?Sized>(&mut self, dataway: &mut D) {
-        self.answered = true;
         let error = self.error;
         let mut status = if error { 1 } else { 0 };
         if self.last_error {
