@@ -163,7 +163,7 @@ fn run(args: &Args) -> Result<(), String> {
         ProgressBar::new(args.messages)
     };
     if let Ok(style) = ProgressStyle::with_template(
-        "{spinner} commands [{bar:40}] {pos}/{len} ({per_sec}, {eta} left)",
+        "{spinner} commands [{bar:40}] {human_pos}/{human_len} ({eta} left)",
     ) {
         bar.set_style(style.progress_chars("=> "));
     }
