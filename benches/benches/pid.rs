@@ -1,17 +1,17 @@
-//! A closed loop (controller + first-order plant) per sample: regler's `Pid` in f32, f64,
-//! I16F16 and I32F32 with every feature on, beside the `pid` crate's P+I+D update.
+//! regler's `Pid` in f32, f64, I16F16 and I32F32 with every feature on, one closed-loop sample
+//! (controller + first-order plant) each; and the fair comparison with the `pid` crate's P+I+D
+//! update: one generic loop function for both, four workloads, the update inlined into the loop
+//! or called once per sample.
 
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use fixed::types::{I16F16, I32F32};
-use regler_benches::pid_loop::{AnchorLoop, ReglerLoop};
+use regler_benches::pid_loop::ReglerLoop;
 
 fn closed_loop(c: &mut Criterion) {
     let mut group = c.benchmark_group("pid_closed_loop_sample");
     group.throughput(Throughput::Elements(1));
-    let mut anchor = AnchorLoop::new();
-    group.bench_function("pid_crate_f32", |b| b.iter(|| black_box(anchor.step())));
     let mut f32_loop = ReglerLoop::<f32>::new();
     group.bench_function("regler_f32", |b| b.iter(|| black_box(f32_loop.step())));
     let mut f64_loop = ReglerLoop::<f64>::new();
@@ -27,27 +27,29 @@ fn closed_loop(c: &mut Criterion) {
 /// per iteration (`regler_benches::pid_shapes`); subtract the `none` row (the loop's own work)
 /// to get a controller's time per update.
 fn shapes(c: &mut Criterion) {
-    use regler_benches::pid_shapes::{Null, Shape, anchor, regler, run};
+    use regler_benches::pid_shapes::{Call, Null, Shape, anchor, regler, run_with};
     for (name, shape) in [
         ("constant", Shape::Constant),
         ("steps", Shape::Steps),
         ("noise", Shape::Noise),
         ("saturation", Shape::Saturation),
     ] {
-        let mut group = c.benchmark_group(format!("pid_shape_{name}_1000_samples"));
-        group.throughput(Throughput::Elements(1000));
-        let mut r = regler();
-        group.bench_function("regler_f32", |b| {
-            b.iter(|| run(&mut r, black_box(shape), 1000))
-        });
-        let mut p = anchor();
-        group.bench_function("pid_crate_f32", |b| {
-            b.iter(|| run(&mut p, black_box(shape), 1000))
-        });
-        group.bench_function("none", |b| {
-            b.iter(|| run(&mut Null, black_box(shape), 1000))
-        });
-        group.finish();
+        for (how, call) in [("", Call::Inlined), ("_call", Call::PerSample)] {
+            let mut group = c.benchmark_group(format!("pid_shape_{name}{how}_1000_samples"));
+            group.throughput(Throughput::Elements(1000));
+            let mut r = regler();
+            group.bench_function("regler_f32", |b| {
+                b.iter(|| run_with(&mut r, call, black_box(shape), 1000))
+            });
+            let mut p = anchor();
+            group.bench_function("pid_crate_f32", |b| {
+                b.iter(|| run_with(&mut p, call, black_box(shape), 1000))
+            });
+            group.bench_function("none", |b| {
+                b.iter(|| run_with(&mut Null, call, black_box(shape), 1000))
+            });
+            group.finish();
+        }
     }
 }
 

@@ -1,5 +1,7 @@
-//! The closed loop the PID benches share: a controller and a first-order plant
-//! (y ← y + a·(u − y)), set-point 1, so every implementation does the same work per sample.
+//! regler's controller in each number type on one closed loop: the controller and a first-order
+//! plant (y ← y + a·(u − y)), set-point 1, so every type does the same work per sample. The
+//! comparison with the `pid` crate is in [`pid_shapes`](crate::pid_shapes), where both
+//! controllers run in one generic loop function.
 
 use regler_pid::{Config, Kind, Pid, Scalar};
 
@@ -9,8 +11,9 @@ pub const PLANT_A: f64 = 0.05;
 pub const K: f64 = 2.0;
 /// Integral time, s.
 pub const TI: f64 = 1.0;
-/// Derivative time, s.
-pub const TD: f64 = 0.2;
+/// Derivative time, s: short enough that the `pid` crate's unfiltered derivative (gain K·Td/h = 4)
+/// leaves its loop stable (at Td = 0.2 s its loop rings between the output limits for good).
+pub const TD: f64 = 0.02;
 /// Sample period, s.
 pub const H: f64 = 0.01;
 
@@ -71,38 +74,5 @@ impl<T: Scalar> ReglerLoop<T> {
 impl<T: Scalar> Default for ReglerLoop<T> {
     fn default() -> ReglerLoop<T> {
         ReglerLoop::new()
-    }
-}
-
-/// The `pid` crate on the same loop: P, I and D gains as regler's ideal form (kp = K,
-/// ki = K·h/Ti per sample, kd = K·Td/h), output limit ±5.
-pub struct AnchorLoop {
-    pid: pid::Pid<f32>,
-    y: f32,
-}
-
-impl Default for AnchorLoop {
-    fn default() -> AnchorLoop {
-        AnchorLoop::new()
-    }
-}
-
-impl AnchorLoop {
-    /// The loop at rest.
-    #[must_use]
-    pub fn new() -> AnchorLoop {
-        let mut pid = pid::Pid::new(1.0f32, 5.0);
-        pid.p(K as f32, 100.0)
-            .i((K * H / TI) as f32, 5.0)
-            .d((K * TD / H) as f32, 100.0);
-        AnchorLoop { pid, y: 0.0 }
-    }
-
-    /// One sample.
-    #[inline]
-    pub fn step(&mut self) -> f32 {
-        let u = self.pid.next_control_output(self.y).output;
-        self.y += PLANT_A as f32 * (u - self.y);
-        self.y
     }
 }

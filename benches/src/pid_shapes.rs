@@ -1,7 +1,7 @@
 //! One loop shape for both controllers, four workloads: the fair comparison the PID benches and
 //! the `pid-shapes` instruction counter share. The loop is the same generic function for both
 //! sides (`#[inline(never)]` per controller type, the controller's `update` inlined into it the
-//! same way), the plant is the same first-order step, and the workload's own cost (set-point
+//! same way, `#[inline(always)]` so that neither depends on the compiler's size heuristics), the plant is the same first-order step, and the workload's own cost (set-point
 //! schedule, measurement noise) is the same on both sides.
 
 use crate::pid_loop::{H, K, PLANT_A, TD, TI, regler_config};
@@ -14,7 +14,7 @@ pub trait Controller {
 }
 
 impl Controller for Pid<f32> {
-    #[inline]
+    #[inline(always)]
     fn update(&mut self, setpoint: f32, measurement: f32) -> f32 {
         Pid::update(self, setpoint, measurement)
     }
@@ -25,7 +25,7 @@ impl Controller for Pid<f32> {
 pub struct Null;
 
 impl Controller for Null {
-    #[inline]
+    #[inline(always)]
     fn update(&mut self, setpoint: f32, measurement: f32) -> f32 {
         setpoint - measurement
     }
@@ -35,7 +35,7 @@ impl Controller for Null {
 pub struct Anchor(pub pid::Pid<f32>);
 
 impl Controller for Anchor {
-    #[inline]
+    #[inline(always)]
     fn update(&mut self, setpoint: f32, measurement: f32) -> f32 {
         self.0.setpoint(setpoint);
         self.0.next_control_output(measurement).output
@@ -60,6 +60,44 @@ pub fn anchor() -> Anchor {
 #[must_use]
 pub fn regler() -> Pid<f32> {
     Pid::new(&regler_config()).expect("valid bench configuration")
+}
+
+/// A controller called out of line, once per sample: the shape of firmware, where a timer
+/// interrupt or a scheduler calls `update` and nothing of the controller stays in registers
+/// between samples (no coefficient load hoisted out of a loop, prologue and epilogue paid every
+/// sample). [`run`] with a bare controller shows the other extreme: the update inlined into the
+/// loop.
+pub struct OutOfLine<C>(pub C);
+
+impl<C: Controller> Controller for OutOfLine<C> {
+    #[inline(never)]
+    fn update(&mut self, setpoint: f32, measurement: f32) -> f32 {
+        self.0.update(setpoint, measurement)
+    }
+}
+
+/// How the controller meets the loop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Call {
+    /// `update` inlined into the loop.
+    Inlined,
+    /// One out-of-line call per sample ([`OutOfLine`]).
+    PerSample,
+}
+
+/// Runs `samples` samples of `shape` with `c` met the way `call` says.
+pub fn run_with<C: Controller>(c: &mut C, call: Call, shape: Shape, samples: u64) -> f32 {
+    match call {
+        Call::Inlined => run(c, shape, samples),
+        Call::PerSample => run(&mut OutOfLine(&mut *c), shape, samples),
+    }
+}
+
+impl<C: Controller> Controller for &mut C {
+    #[inline(always)]
+    fn update(&mut self, setpoint: f32, measurement: f32) -> f32 {
+        (**self).update(setpoint, measurement)
+    }
 }
 
 /// The workloads.
@@ -119,4 +157,34 @@ pub fn run<C: Controller>(c: &mut C, shape: Shape, samples: u64) -> f32 {
         y += a * (u - y);
     }
     y
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, reason = "a test may panic: that is how it fails")]
+    use super::*;
+
+    /// The harness measures working loops: both controllers settle on the set-point, follow
+    /// the steps, hold through the noise and sit at the limit when saturated, inlined or called.
+    #[test]
+    fn both_controllers_control_every_shape() {
+        for call in [Call::Inlined, Call::PerSample] {
+            for (shape, want, tolerance) in [
+                (Shape::Constant, 1.0, 0.01),
+                (Shape::Steps, 1.0, 0.25),
+                (Shape::Noise, 1.0, 0.1),
+                (Shape::Saturation, 5.0, 0.01),
+            ] {
+                // 3 000 samples end 200 into a set-point of +1 on the steps (coming from −1).
+                let a = run_with(&mut regler(), call, shape, 3000);
+                let b = run_with(&mut anchor(), call, shape, 3000);
+                for (who, y) in [("regler", a), ("pid crate", b)] {
+                    assert!(
+                        (y - want).abs() < tolerance,
+                        "{who} {shape:?} {call:?}: {y}"
+                    );
+                }
+            }
+        }
+    }
 }

@@ -138,8 +138,8 @@ pub const STATE_BOUND: u16 = 100;
 ///
 /// A NaN or infinite set-point or measurement (the first sample included) holds the output, sets a
 /// [`Faults`] flag and leaves every state as it was, so the controller runs on as soon as the
-/// inputs are finite again; `update` never returns NaN or infinity. A `Pid<T>` holds 19 values of
-/// `T` and 4 bytes of flags, padded to `T`'s alignment: 80 bytes for `f32`, 160 for `f64` and
+/// inputs are finite again; `update` never returns NaN or infinity. A `Pid<T>` holds 20 values of
+/// `T` and 2 bytes of flags, padded to `T`'s alignment: 84 bytes for `f32`, 168 for `f64` and
 /// `I32F32`.
 ///
 /// ```
@@ -160,31 +160,58 @@ pub const STATE_BOUND: u16 = 100;
 /// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Pid<T> {
+    // The order keeps the pairs one update uses side by side (ad and bd, bi and ao, D and its
+    // input) apart in memory: adjacent, they tempt the compiler into two-lane vector code that
+    // takes more instructions than the scalar arithmetic it replaces.
     kp: T,
-    b: T,
-    c: T,
     bi: T,
+    b: T,
     ad: T,
-    bd: T,
+    c: T,
     ao: T,
     ymin: T,
+    bd: T,
     ymax: T,
+    /// The rate limit per sample; `T::MAX` when there is none (the window then spans every
+    /// value, so the update needs no branch for it).
     dymax: T,
     /// kp·(1 − b): the P term's steady-state offset per unit of set-point, which the integral
-    /// must cancel; the integral's bounds move with it.
+    /// must cancel; the integral's bounds move with it (0 for kinds without I).
     offset_slope: T,
-    i_lo: T,
-    i_hi: T,
-    d_bound: T,
+    /// The middle of the integral's bounds at set-point 0: (ymin + ymax)/2.
+    i_mid: T,
+    /// The half-width of the integral's bounds: (ymax − ymin)/2 + [`STATE_BOUND`] scales.
+    i_half: T,
+    /// −[`STATE_BOUND`] scales: the derivative term's lower bound.
+    d_lo: T,
+    /// [`STATE_BOUND`] scales: the derivative term's upper bound.
+    d_hi: T,
     i: T,
     d: T,
-    y_old: T,
     r_old: T,
+    /// y − c·r of the last sample: the derivative's input (and with `r_old` the last
+    /// measurement, for a bumpless change).
+    yd_old: T,
     u_old: T,
-    has_dymax: bool,
-    started: bool,
-    mode: Mode,
+    /// [`STARTED`] and [`MANUAL`] in one byte, so that the common case (automatic and
+    /// running) is one test per sample.
+    flags: u8,
     faults: Faults,
+}
+
+/// A sample has been taken since construction or reset.
+const STARTED: u8 = 1;
+/// The mode is [`Mode::Manual`].
+const MANUAL: u8 = 1 << 1;
+
+/// One sample's results before they are stored.
+#[derive(Clone, Copy)]
+struct Sample<T> {
+    /// y − c·r: the derivative's input.
+    yd: T,
+    d: T,
+    u: T,
+    i: T,
 }
 
 /// The coefficients of one configuration, converted and checked, before any is applied.
@@ -200,8 +227,8 @@ struct Coefficients<T> {
     ymax: T,
     dymax: Option<T>,
     offset_slope: T,
-    i_lo: T,
-    i_hi: T,
+    i_mid: T,
+    i_half: T,
     d_bound: T,
 }
 
@@ -278,23 +305,15 @@ impl<T: Scalar> Coefficients<T> {
             ymin: limit(config.ymin, Parameter::Ymin, "ymin")?,
             ymax: limit(config.ymax, Parameter::Ymax, "ymax")?,
             dymax,
-            // Kinds without I hold a constant bias (their manual reset): no clamp per sample;
-            // where the bias is set, `bounded_integral` bounds it around the output limits.
+            // Kinds without I hold a constant bias (their manual reset), bounded around the
+            // output limits where it is set; the per-sample check then never moves it.
             offset_slope: if kind.has_i() {
                 T::from_real(kp * (one - config.b))
             } else {
                 T::ZERO
             },
-            i_lo: if kind.has_i() {
-                T::from_real(config.ymin - bound)
-            } else {
-                T::ZERO.sub(T::MAX)
-            },
-            i_hi: if kind.has_i() {
-                T::from_real(config.ymax + bound)
-            } else {
-                T::MAX
-            },
+            i_mid: T::from_real((config.ymin + config.ymax) / F::from_u16(2)),
+            i_half: T::from_real((config.ymax - config.ymin) / F::from_u16(2) + bound),
             d_bound: T::from_real(bound),
         })
     }
@@ -353,17 +372,16 @@ impl<T: Scalar> Pid<T> {
             ymax: zero,
             dymax: zero,
             offset_slope: zero,
-            i_lo: zero,
-            i_hi: zero,
-            d_bound: zero,
+            i_mid: zero,
+            i_half: zero,
+            d_lo: zero,
+            d_hi: zero,
             i: zero,
             d: zero,
-            y_old: zero,
+            yd_old: zero,
             r_old: zero,
             u_old: zero,
-            has_dymax: false,
-            started: false,
-            mode: Mode::Auto,
+            flags: 0,
             faults: Faults::default(),
         };
         pid.apply(k);
@@ -381,12 +399,12 @@ impl<T: Scalar> Pid<T> {
         self.ao = k.ao;
         self.ymin = k.ymin;
         self.ymax = k.ymax;
-        self.has_dymax = k.dymax.is_some();
-        self.dymax = k.dymax.unwrap_or(T::ZERO);
+        self.dymax = k.dymax.unwrap_or(T::MAX);
         self.offset_slope = k.offset_slope;
-        self.i_lo = k.i_lo;
-        self.i_hi = k.i_hi;
-        self.d_bound = k.d_bound;
+        self.i_mid = k.i_mid;
+        self.i_half = k.i_half;
+        self.d_lo = T::ZERO.sub(k.d_bound);
+        self.d_hi = k.d_bound;
     }
 
     /// One sample: the output for set-point `r` and measurement `y`.
@@ -405,73 +423,140 @@ impl<T: Scalar> Pid<T> {
         self.step::<true>(setpoint, measurement, inputs.feedforward, inputs.track)
     }
 
-    /// The integral's bounds at set-point `r`: [`STATE_BOUND`] output scales beyond the values
-    /// that hold the output at a limit in steady state.
+    /// The centre of the integral's bounds at set-point `r`: [`STATE_BOUND`] output scales
+    /// either side of the values that hold the output at a limit in steady state.
     #[inline(always)]
-    fn integral_bounds(&self, r: T, feedforward: T) -> (T, T) {
-        let center = self.offset_slope.mul(r).sub(feedforward);
-        (self.i_lo.add(center), self.i_hi.add(center))
+    fn integral_centre(&self, r: T, feedforward: T) -> T {
+        self.offset_slope.mul(r).add(self.i_mid).sub(feedforward)
     }
 
+    /// One sample. The common case — automatic, running, the integral inside its bounds —
+    /// runs here, inlined into the caller; everything else (the first sample, manual mode, an
+    /// integral at its bound, a fault) goes to [`step_general`](Pid::step_general), which
+    /// computes the sample again from scratch (nothing has been stored yet). Being a tail
+    /// call, it keeps no value of this path alive: on Cortex-M the update then needs no
+    /// callee-saved FPU registers, which a call in the middle of it would (a 16-instruction
+    /// prologue and epilogue on every sample).
     #[inline(always)]
     fn step<const FEEDFORWARD: bool>(&mut self, r: T, y: T, feedforward: T, track: Option<T>) -> T {
-        // Nothing is stored until the result is known to be finite: a NaN on the first sample
-        // must not become y_old.
-        let (y_old, r_old) = if self.started {
-            (self.y_old, self.r_old)
+        if self.flags == STARTED {
+            let s = self.compute::<FEEDFORWARD>(r, y, feedforward, track, self.yd_old, false);
+            // One test accepts the sample: the new integral lies inside its bounds, which move
+            // with the set-point. It also proves every value finite: a NaN or infinite r or y
+            // makes P (and r − y) non-finite — 0·∞ is NaN, so kinds without P or I are no
+            // exception — and a non-finite v reaches I through the tracking term ao·(u − v),
+            // so a finite I means finite inputs, v and bounds.
+            let centre =
+                self.integral_centre(r, self.bounds_feedforward::<FEEDFORWARD>(feedforward));
+            if centre.sub(s.i).magnitude_within(self.i_half) {
+                return self.commit(s, r, track);
+            }
+        }
+        self.step_general::<FEEDFORWARD>(r, y, feedforward, track)
+    }
+
+    /// Every sample the fast path of [`step`](Pid::step) does not take: the first one (its
+    /// derivative input is its own, so there is no kick), manual mode (the operator's output
+    /// stands and I follows so that v = u when auto returns), the integral limited to its
+    /// bounds, and faults (nothing stored, the output held).
+    #[cold]
+    #[inline(never)]
+    fn step_general<const FEEDFORWARD: bool>(
+        &mut self,
+        r: T,
+        y: T,
+        feedforward: T,
+        track: Option<T>,
+    ) -> T {
+        let yd_old = if self.started() {
+            self.yd_old
         } else {
-            (y, r)
+            y.sub(self.c.mul(r))
         };
-        let p = self.kp.mul(self.b.mul(r).sub(y));
-        let change = y.sub(self.c.mul(r)).sub(y_old.sub(self.c.mul(r_old)));
-        let d = self
-            .ad
-            .mul(self.d)
-            .sub(self.bd.mul(change))
-            .flush_tiny()
-            .clamp_within(T::ZERO.sub(self.d_bound), self.d_bound);
-        let (v, u, i) = match self.mode {
-            Mode::Manual => {
-                // The operator's output stands; I follows so that v = u when auto returns.
-                let u = self.u_old;
-                (u, u, u.sub(p).sub(d))
-            }
-            Mode::Auto => {
-                let mut v = p.add(self.i).add(d);
-                if FEEDFORWARD {
-                    v = v.add(feedforward);
-                }
-                let mut u = v;
-                if self.has_dymax {
-                    u = u.clamp_within(self.u_old.sub(self.dymax), self.u_old.add(self.dymax));
-                }
-                u = u.clamp_within(self.ymin, self.ymax);
-                let applied = track.unwrap_or(u);
-                // I + (integral step + tracking), summed in the reference's order.
-                let step = self.bi.mul(r.sub(y)).add(self.ao.mul(applied.sub(v)));
-                (v, u, self.i.add(step))
-            }
-        };
-        // The bounds move with the set-point (for kinds without I they are ±MAX and the clamp
-        // changes nothing).
-        let (lo, hi) = self.integral_bounds(r, feedforward);
-        let bounded = i.clamp_within(lo, hi);
-        // P is NaN or infinite whenever r or y is (0·∞ is NaN), and v and the unbounded I both
-        // contain P; the bounds are infinite when an absurd set-point overflows them. One sum
-        // and one test cover all three (a sum of two finite states overflows only beyond
-        // 10³⁸, where a fault is the right answer anyway).
-        if !T::both_finite(v, i.add(bounded)) {
+        let manual = self.flags & MANUAL != 0;
+        let mut s = self.compute::<FEEDFORWARD>(r, y, feedforward, track, yd_old, manual);
+        let centre = self.integral_centre(r, self.bounds_feedforward::<FEEDFORWARD>(feedforward));
+        let bounded = centre.add(
+            s.i.sub(centre)
+                .clamp_within(T::ZERO.sub(self.i_half), self.i_half),
+        );
+        // A finite I implies finite inputs and v (see `step`; in manual I = u − P − D); the
+        // bounds themselves may overflow when an absurd set-point moves them.
+        if !T::both_finite(s.i, bounded) {
             self.fault(r, y);
             return self.u_old;
         }
-        let i = bounded;
-        self.started = true;
-        self.i = i;
-        self.d = d;
-        self.y_old = y;
+        s.i = bounded;
+        self.commit(s, r, track)
+    }
+
+    /// The sample's new states and output, computed from the stored ones; nothing is stored.
+    #[inline(always)]
+    fn compute<const FEEDFORWARD: bool>(
+        &self,
+        r: T,
+        y: T,
+        feedforward: T,
+        track: Option<T>,
+        yd_old: T,
+        manual: bool,
+    ) -> Sample<T> {
+        let p = self.kp.mul(self.b.mul(r).sub(y));
+        let yd = y.sub(self.c.mul(r));
+        let d = self
+            .ad
+            .mul(self.d)
+            .sub(self.bd.mul(yd.sub(yd_old)))
+            .flush_tiny()
+            .clamp_within(self.d_lo, self.d_hi);
+        if manual {
+            let u = self.u_old;
+            return Sample {
+                yd,
+                d,
+                u,
+                i: u.sub(p).sub(d),
+            };
+        }
+        let mut v = p.add(self.i).add(d);
+        if FEEDFORWARD {
+            v = v.add(feedforward);
+        }
+        let u = v
+            .clamp_within(self.u_old.sub(self.dymax), self.u_old.add(self.dymax))
+            .clamp_within(self.ymin, self.ymax);
+        let applied = track.unwrap_or(u);
+        // I + (integral step + tracking), summed in the reference's order.
+        let step = self.bi.mul(r.sub(y)).add(self.ao.mul(applied.sub(v)));
+        Sample {
+            yd,
+            d,
+            u,
+            i: self.i.add(step),
+        }
+    }
+
+    /// The feed-forward the integral's bounds follow: a kind with I has them move with it (the
+    /// integral makes up the rest); a kind without I keeps its bias where it was set.
+    #[inline(always)]
+    fn bounds_feedforward<const FEEDFORWARD: bool>(&self, feedforward: T) -> T {
+        if FEEDFORWARD && self.integrates() {
+            feedforward
+        } else {
+            T::ZERO
+        }
+    }
+
+    /// Stores an accepted sample; returns its output.
+    #[inline(always)]
+    fn commit(&mut self, s: Sample<T>, r: T, track: Option<T>) -> T {
+        self.flags |= STARTED;
+        self.i = s.i;
+        self.d = s.d;
+        self.yd_old = s.yd;
         self.r_old = r;
-        self.u_old = track.unwrap_or(u);
-        u
+        self.u_old = track.unwrap_or(s.u);
+        s.u
     }
 
     /// A sample whose measurement could not be converted (not finite): the output is held and
@@ -490,25 +575,19 @@ impl<T: Scalar> Pid<T> {
         };
     }
 
-    /// Whether the kind has I (the others hold a constant bias, their manual reset, bounded only
-    /// where it is set). Exactly the kinds with a tracking coefficient: `new` refuses an `ao`
-    /// that vanishes for them.
+    /// Whether the kind has I (the others hold a constant bias, their manual reset). Exactly
+    /// the kinds with a tracking coefficient: `new` refuses an `ao` that vanishes for them.
     fn integrates(&self) -> bool {
         self.ao != T::ZERO
     }
 
-    /// `i` within the integral's bounds at the last set-point, or for a kind without I (whose
-    /// bias a spike must not hold at a limit for good) within [`STATE_BOUND`] scales of the output
-    /// limits; a non-finite `i` (a new gain so large that the bumpless adjustment overflowed)
-    /// becomes the nearest in-bound value to 0.
+    /// `i` within the integral's bounds at the last set-point (for a kind without I, whose
+    /// bias a spike must not hold at a limit for good, the bounds sit around the output limits:
+    /// its `offset_slope` is 0); a non-finite `i` (a new gain so large that the bumpless
+    /// adjustment overflowed) becomes the nearest in-bound value to 0.
     fn bounded_integral(&self, i: T) -> T {
-        // A kind without I never moves its bias again, so its bounds must not follow a set-point
-        // that may have been absurd: they sit around the output limits themselves.
-        let (lo, hi) = if self.integrates() {
-            self.integral_bounds(self.r_old, T::ZERO)
-        } else {
-            (self.ymin.sub(self.d_bound), self.ymax.add(self.d_bound))
-        };
+        let centre = self.integral_centre(self.r_old, T::ZERO);
+        let (lo, hi) = (centre.sub(self.i_half), centre.add(self.i_half));
         if !T::both_finite(lo, hi) {
             return T::ZERO;
         }
@@ -530,12 +609,15 @@ impl<T: Scalar> Pid<T> {
     /// On an error nothing changes.
     pub fn set_config<F: Real>(&mut self, config: &Config<F>) -> Result<(), ConfigError<F>> {
         let k = Coefficients::<T>::new(config)?;
-        let p_before = self.proportional(self.r_old, self.y_old);
+        let y_old = self.last_measurement();
+        let p_before = self.proportional(self.r_old, y_old);
         self.apply(k);
         let mut i = self.i;
-        if self.started {
-            let p_after = self.proportional(self.r_old, self.y_old);
+        if self.started() {
+            let p_after = self.proportional(self.r_old, y_old);
             i = i.add(p_before).sub(p_after);
+            // The derivative's input under the new weight c: steady readings stay steady.
+            self.yd_old = y_old.sub(self.c.mul(self.r_old));
         }
         if !config.kind.has_d() {
             if config.kind.has_i() {
@@ -548,6 +630,17 @@ impl<T: Scalar> Pid<T> {
         Ok(())
     }
 
+    /// Whether a sample has been taken since construction or reset.
+    const fn started(&self) -> bool {
+        self.flags & STARTED != 0
+    }
+
+    /// The last sample's measurement, from the derivative's input y − c·r (exact where c·r is,
+    /// always for c = 0; within rounding otherwise).
+    fn last_measurement(&self) -> T {
+        self.yd_old.add(self.c.mul(self.r_old))
+    }
+
     fn proportional(&self, r: T, y: T) -> T {
         self.kp.mul(self.b.mul(r).sub(y))
     }
@@ -558,24 +651,28 @@ impl<T: Scalar> Pid<T> {
             return Err(ValueError::NotFinite);
         }
         self.u_old = u.clamp_within(self.ymin, self.ymax);
-        self.mode = Mode::Manual;
+        self.flags |= MANUAL;
         Ok(())
     }
 
     /// Switches back to automatic, bumplessly: the integral is set so that the next output
     /// starts from the manual one (within its bounds, see [`STATE_BOUND`]).
     pub fn set_auto(&mut self) {
-        if self.mode == Mode::Manual && self.started {
-            let p = self.proportional(self.r_old, self.y_old);
+        if self.flags == STARTED | MANUAL {
+            let p = self.proportional(self.r_old, self.last_measurement());
             self.i = self.bounded_integral(self.u_old.sub(p).sub(self.d));
         }
-        self.mode = Mode::Auto;
+        self.flags &= !MANUAL;
     }
 
     /// Auto or manual.
     #[must_use]
     pub const fn mode(&self) -> Mode {
-        self.mode
+        if self.flags & MANUAL == 0 {
+            Mode::Auto
+        } else {
+            Mode::Manual
+        }
     }
 
     /// The last output.
@@ -611,10 +708,9 @@ impl<T: Scalar> Pid<T> {
     pub fn reset(&mut self) {
         self.i = T::ZERO;
         self.d = T::ZERO;
-        self.y_old = T::ZERO;
+        self.yd_old = T::ZERO;
         self.r_old = T::ZERO;
-        self.started = false;
-        self.mode = Mode::Auto;
+        self.flags = 0;
         self.faults = Faults::default();
         self.u_old = T::ZERO.clamp_within(self.ymin, self.ymax);
     }
@@ -638,10 +734,11 @@ mod tests {
     }
 
     #[test]
-    fn size_is_19_values_and_4_bytes_padded() {
-        // 19 values of T, then 2 flags, the mode and the faults (4 bytes), padded to T's alignment.
-        assert_eq!(core::mem::size_of::<Pid<f32>>(), 19 * 4 + 4);
-        assert_eq!(core::mem::size_of::<Pid<f64>>(), 19 * 8 + 8);
+    fn size_is_20_values_and_3_bytes_padded() {
+        // 20 values of T, then the flags (started, manual) and the faults (2 bytes), padded to
+        // T's alignment.
+        assert_eq!(core::mem::size_of::<Pid<f32>>(), 20 * 4 + 4);
+        assert_eq!(core::mem::size_of::<Pid<f64>>(), 20 * 8 + 8);
     }
 
     #[test]
@@ -802,6 +899,70 @@ mod tests {
             },
         );
         assert_eq!(ff, 3.0);
+    }
+
+    /// A kick decays in the derivative filter: with ad > 1/2 plain float arithmetic would get
+    /// stuck at the smallest subnormal (a third of an ulp rounds back up) and pay the
+    /// subnormal penalty every sample; with the flush the decay ends on a normal number a few
+    /// grid steps (2⁻¹²⁴, 2⁻¹⁰¹³) above 0, never on a subnormal.
+    #[test]
+    fn a_decaying_derivative_never_goes_subnormal() {
+        fn run<T: Scalar>(is_subnormal: fn(T) -> bool) -> f64 {
+            let config = Config {
+                kind: Kind::PD,
+                k: 1.0,
+                td: 9.0,
+                n: 1.0,
+                h: 1.0,
+                ..Config::default()
+            };
+            let mut pid = Pid::<T>::new(&config).unwrap();
+            pid.update(T::ZERO, T::ZERO);
+            pid.update(T::ZERO, T::from_f64(1.0));
+            assert!(pid.derivative().to_f64() < -0.5);
+            // ad = 0.9: from 1 to 2⁻¹²⁴ takes about 820 samples, to 2⁻¹⁰¹³ about 6700.
+            for n in 0..10_000 {
+                pid.update(T::ZERO, T::from_f64(1.0));
+                assert!(!is_subnormal(pid.derivative()), "sample {n}");
+            }
+            pid.derivative().to_f64()
+        }
+        // round(0.9·m) = m for m ≤ 4 grid steps: that is where the decay ends.
+        let d = run::<f32>(f32::is_subnormal);
+        assert!(d.abs() <= 5.0 * 2f64.powi(-124), "{d:e}");
+        let d = run::<f64>(f64::is_subnormal);
+        assert!(d.abs() <= 5.0 * 2f64.powi(-1013), "{d:e}");
+    }
+
+    /// A kind without I holds a constant bias (its manual reset): a feed-forward, however large,
+    /// must not move it, while a kind with I has bounds that follow the feed-forward.
+    #[test]
+    fn feedforward_never_moves_the_bias_of_a_kind_without_i() {
+        let config = Config {
+            kind: Kind::PD,
+            k: 1.0,
+            td: 1.0,
+            h: 0.1,
+            ymin: -1.0,
+            ymax: 1.0,
+            ..Config::default()
+        };
+        let mut pid = Pid::<f64>::new(&config).unwrap();
+        pid.update(0.0, 0.0);
+        pid.set_manual(0.5).unwrap();
+        pid.update(0.0, 0.0);
+        pid.set_auto();
+        let bias = pid.integral();
+        assert_eq!(bias, 0.5);
+        for feedforward in [1e6, -1e9, 3.0, 0.0] {
+            let inputs = Inputs {
+                feedforward,
+                track: None,
+            };
+            pid.update_with(0.0, 0.0, inputs);
+            assert_eq!(pid.integral(), bias, "feed-forward {feedforward}");
+        }
+        assert_eq!(pid.update(0.0, 0.0), 0.5);
     }
 
     #[cfg(feature = "fixed")]

@@ -707,19 +707,8 @@ impl<T: Scalar, F: Real> Station<T, F> {
     /// [`refused_commit`](Station::refused_commit) says why. A non-finite `xin` holds the output
     /// and raises the controller's non-finite-input fault and the alarm.
     pub fn sample(&mut self, xin: F) -> F {
-        // The active set is copied only when a commit may have to be refused.
-        let previous = self.staged.commit_pending().then_some(self.staged.active);
-        if let (Some(previous), Some(p)) = (previous, self.staged.take_commit()) {
-            match self.pid.set_config(&p.config) {
-                Ok(()) => {
-                    self.commits = self.commits.saturating_add(1);
-                    self.refused = None;
-                }
-                Err(e) => {
-                    self.staged.refuse_commit(previous);
-                    self.refused = Some(e);
-                }
-            }
+        if self.staged.commit_pending() {
+            self.commit_staged();
         }
         let active = self.staged.active;
         let setpoint = self.setpoint();
@@ -745,6 +734,28 @@ impl<T: Scalar, F: Real> Station<T, F> {
         self.alarm
             .update(error.is_nan() || error.abs() > active.rfel);
         self.y
+    }
+
+    /// Applies the staged parameters at a sample (rare: when the operator keyed a change). Out
+    /// of line so that the sample's own stack frame stays small on the samples that do not
+    /// commit (the controller's validation and coefficients need a few hundred bytes).
+    #[cold]
+    #[inline(never)]
+    fn commit_staged(&mut self) {
+        // The active set is copied only when a commit may have to be refused.
+        let previous = self.staged.active;
+        if let Some(p) = self.staged.take_commit() {
+            match self.pid.set_config(&p.config) {
+                Ok(()) => {
+                    self.commits = self.commits.saturating_add(1);
+                    self.refused = None;
+                }
+                Err(e) => {
+                    self.staged.refuse_commit(previous);
+                    self.refused = Some(e);
+                }
+            }
+        }
     }
 
     /// Why the last commit was refused, if it was (cleared by the next commit that lands).

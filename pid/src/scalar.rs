@@ -56,8 +56,17 @@ pub trait Scalar: Copy + PartialOrd + core::fmt::Debug {
     fn both_finite(a: Self, b: Self) -> bool {
         a.is_finite() && b.is_finite()
     }
-    /// Zero for a magnitude so small that products of it would go subnormal (floats only:
-    /// below 1e-30 for `f32`, 1e-290 for `f64`).
+    /// Whether |`self`| ≤ `bound` (`bound` ≥ 0); false for NaN and infinities. One test where
+    /// a range check would take two.
+    #[inline(always)]
+    fn magnitude_within(self, bound: Self) -> bool {
+        self.is_finite() && self <= bound && self >= Self::ZERO.sub(bound)
+    }
+    /// The value, with magnitudes so small that products of them would go subnormal moved to 0
+    /// or a normal number (floats only). For `f32`: below 2⁻¹²⁵ (2.4e-38) it becomes 0; below
+    /// 2⁻⁷⁵ (2.6e-23) it is rounded onto the multiples of 2⁻¹²⁴ (normal numbers), moving by at
+    /// most 2⁻²³·(|x| + 2⁻¹⁰⁰); from 2⁻⁷⁵ up it passes unchanged. For `f64` the same with
+    /// 2⁻¹⁰¹⁴, 2⁻⁹⁰⁶, 2⁻¹⁰¹³ and 2⁻⁵²·(|x| + 2⁻⁹⁶⁰). Fixed point: unchanged.
     /// Subnormal arithmetic costs about a hundred cycles on common CPUs; a decaying filter
     /// state would otherwise slow the controller twenty-fold once the loop has settled.
     #[inline(always)]
@@ -65,23 +74,26 @@ pub trait Scalar: Copy + PartialOrd + core::fmt::Debug {
     fn flush_tiny(self) -> Self {
         self
     }
-    /// `self` limited to `lo..=hi` (which must be ordered; never panics).
+    /// `self` limited to `lo..=hi` (which must be ordered; never panics). NaN stays NaN, so a
+    /// fault still reaches the controller's check.
+    ///
+    /// Two independent selects (first the lower bound, then the upper), not an `if … else if`:
+    /// for ordered bounds the result is the same, and a float clamp becomes one `max` and one
+    /// `min` instruction instead of a compare-and-blend chain.
     #[inline(always)]
     #[must_use]
     fn clamp_within(self, lo: Self, hi: Self) -> Self {
-        if self < lo {
-            lo
-        } else if self > hi {
-            hi
-        } else {
-            self
-        }
+        let above = if self < lo { lo } else { self };
+        if above > hi { hi } else { above }
     }
 }
 
-// The flush threshold sits well above the smallest normal (1.2e-38 and 2.2e-308), so that one
-// multiply by a filter coefficient cannot go subnormal, and far below any value a controller
-// works with.
+// The flush anchors: 2⁻¹⁰⁰ (7.9e-31) and 2⁻⁹⁶⁰ (1.0e-289). Half an ulp of each (2⁻¹²⁴, 2⁻¹⁰¹³)
+// is still a normal number (the smallest are 2⁻¹²⁶ and 2⁻¹⁰²²), and both sit far below any value
+// a controller works with.
+const F32_FLUSH_ANCHOR: f32 = f32::from_bits((127 - 100) << 23);
+const F64_FLUSH_ANCHOR: f64 = f64::from_bits((1023 - 960) << 52);
+
 macro_rules! float_ops {
     ($t:ty, $tiny:expr) => {
         #[inline(always)]
@@ -101,8 +113,16 @@ macro_rules! float_ops {
             <$t>::is_finite(self)
         }
         #[inline(always)]
+        fn magnitude_within(self, bound: $t) -> bool {
+            self.abs() <= bound
+        }
+        /// Adding and subtracting the anchor: two flops and no compare. Exact where the anchor
+        /// is below half an ulp of x (|x| ≥ 2²⁵ anchors for f32, 2⁵⁴ for f64); anything
+        /// smaller comes out as 0 or a multiple of half the anchor's ulp, still a normal
+        /// number: a decaying state ends on 0 or a few such steps, never on a subnormal.
+        #[inline(always)]
         fn flush_tiny(self) -> $t {
-            if self.abs() < $tiny { 0.0 } else { self }
+            (self + $tiny) - $tiny
         }
         /// x − x is 0 for a finite x and NaN otherwise: three flops and one compare.
         #[inline(always)]
@@ -124,7 +144,7 @@ impl Scalar for f32 {
     fn to_real<F: Real>(self) -> F {
         F::from_f32_exact(self)
     }
-    float_ops!(f32, 1e-30);
+    float_ops!(f32, F32_FLUSH_ANCHOR);
 }
 
 impl Scalar for f64 {
@@ -138,7 +158,7 @@ impl Scalar for f64 {
     fn to_real<F: Real>(self) -> F {
         F::from_f64_nearest(self)
     }
-    float_ops!(f64, 1e-290);
+    float_ops!(f64, F64_FLUSH_ANCHOR);
 }
 
 #[cfg(feature = "fixed")]
@@ -257,5 +277,111 @@ mod tests {
         }
         // Round to nearest: the errors cancel on average (a floor would sum to about −3e9).
         assert!(signed_error.abs() < 100_000 * 65536 / 50, "{signed_error}");
+    }
+
+    /// Bits spread over the whole f32 range: every exponent, with mantissas from a xorshift.
+    fn f32_samples() -> impl Iterator<Item = f32> {
+        let mut x: u32 = 0x9E37_79B9;
+        (0..2_000_000u32).map(move |n| {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            // The exponent walks through all 256 values; sign and mantissa are random.
+            let exponent = (n % 256) << 23;
+            f32::from_bits((x & 0x807F_FFFF) | exponent)
+        })
+    }
+
+    #[test]
+    fn flush_never_leaves_a_subnormal_and_keeps_every_working_value() {
+        for x in f32_samples().chain([0.0, -0.0, f32::MIN_POSITIVE, -f32::MIN_POSITIVE]) {
+            let got = Scalar::flush_tiny(x);
+            if x.is_nan() {
+                assert!(got.is_nan());
+                continue;
+            }
+            assert!(!got.is_subnormal(), "{x:e} -> {got:e}");
+            if x.abs() >= 2f32.powi(-75) || x.is_infinite() {
+                assert_eq!(got.to_bits(), x.to_bits(), "{x:e} changed");
+            } else {
+                let error = f64::from(got) - f64::from(x);
+                let allowed = 2f64.powi(-23) * (f64::from(x.abs()) + 2f64.powi(-100));
+                assert!(error.abs() <= allowed, "{x:e} -> {got:e}");
+                assert_eq!(got % 2f32.powi(-124), 0.0, "{x:e} -> {got:e} off the grid");
+            }
+            if x.abs() < 2f32.powi(-125) {
+                assert_eq!(got, 0.0, "{x:e}");
+            }
+        }
+        let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+        for n in 0..2_000_000u64 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let v = f64::from_bits((x & 0x800F_FFFF_FFFF_FFFF) | ((n % 2048) << 52));
+            let got = Scalar::flush_tiny(v);
+            if v.is_nan() {
+                assert!(got.is_nan());
+                continue;
+            }
+            assert!(!got.is_subnormal(), "{v:e} -> {got:e}");
+            if v.abs() >= 2f64.powi(-906) || v.is_infinite() {
+                assert_eq!(got.to_bits(), v.to_bits(), "{v:e} changed");
+            } else {
+                // Scaled up by 2¹⁰⁰⁰ so the check's own arithmetic stays normal.
+                let (g, w) = (got * 2f64.powi(1000), v * 2f64.powi(1000));
+                let allowed = 2f64.powi(-52) * (w.abs() + 2f64.powi(40));
+                assert!((g - w).abs() <= allowed, "{v:e} -> {got:e}");
+                assert_eq!(got % 2f64.powi(-1013), 0.0, "{v:e} -> {got:e} off the grid");
+            }
+            if v.abs() < 2f64.powi(-1014) {
+                assert_eq!(got, 0.0, "{v:e}");
+            }
+        }
+    }
+
+    #[test]
+    fn clamp_and_magnitude_agree_with_std_and_keep_nan() {
+        let bounds = [
+            (0.0f32, 0.0f32),
+            (-1.0, 1.0),
+            (-5.0, 3.0),
+            (2.0, 1e30),
+            (-f32::MAX, f32::MAX),
+        ];
+        for x in f32_samples().step_by(7) {
+            for (lo, hi) in bounds {
+                let got = Scalar::clamp_within(x, lo, hi);
+                if x.is_nan() {
+                    assert!(got.is_nan());
+                } else {
+                    assert_eq!(got, x.clamp(lo, hi), "{x} in [{lo}, {hi}]");
+                }
+                let bound = hi.abs();
+                assert_eq!(
+                    Scalar::magnitude_within(x, bound),
+                    x.is_finite() && x.abs() <= bound,
+                    "|{x}| <= {bound}"
+                );
+            }
+        }
+    }
+
+    #[cfg(feature = "fixed")]
+    #[test]
+    fn fixed_magnitude_matches_the_default_everywhere() {
+        use fixed::types::I16F16;
+        let mut x: u32 = 0x0BAD_F00D;
+        for _ in 0..200_000 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            let v = I16F16::from_bits(x as i32);
+            let bound = I16F16::from_bits((x.rotate_left(7) as i32) >> (x & 31)).abs();
+            let wide = i64::from(v.to_bits()).abs() <= i64::from(bound.to_bits());
+            assert_eq!(Scalar::magnitude_within(v, bound), wide, "{v} {bound}");
+        }
+        assert!(!Scalar::magnitude_within(I16F16::MIN, I16F16::MAX));
+        assert!(Scalar::magnitude_within(I16F16::MAX, I16F16::MAX));
     }
 }
