@@ -213,6 +213,10 @@ macro_rules! fixed_scalar {
             fn is_finite(self) -> bool {
                 true
             }
+            #[inline(always)]
+            fn magnitude_within(self, bound: Self) -> bool {
+                self.to_bits().unsigned_abs() <= bound.to_bits().unsigned_abs()
+            }
         }
     };
 }
