@@ -174,9 +174,9 @@ pub fn scaling_round_trips_every_count() -> Outcome {
 }
 
 pub fn sizes_on_a_32_bit_core() -> Outcome {
-    // 20 values and 2 bytes of flags, padded.
-    check!(core::mem::size_of::<Pid<f32>>() == 84);
-    check!(core::mem::size_of::<Pid<I16F16>>() == 84);
+    // 19 values and 2 bytes of flags, padded.
+    check!(core::mem::size_of::<Pid<f32>>() == 80);
+    check!(core::mem::size_of::<Pid<I16F16>>() == 80);
     Ok(())
 }
 

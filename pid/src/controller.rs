@@ -138,8 +138,8 @@ pub const STATE_BOUND: u16 = 100;
 ///
 /// A NaN or infinite set-point or measurement (the first sample included) holds the output, sets a
 /// [`Faults`] flag and leaves every state as it was, so the controller runs on as soon as the
-/// inputs are finite again; `update` never returns NaN or infinity. A `Pid<T>` holds 20 values of
-/// `T` and 2 bytes of flags, padded to `T`'s alignment: 84 bytes for `f32`, 168 for `f64` and
+/// inputs are finite again; `update` never returns NaN or infinity. A `Pid<T>` holds 19 values of
+/// `T` and 2 bytes of flags, padded to `T`'s alignment: 80 bytes for `f32`, 160 for `f64` and
 /// `I32F32`.
 ///
 /// ```
@@ -182,10 +182,8 @@ pub struct Pid<T> {
     i_mid: T,
     /// The half-width of the integral's bounds: (ymax − ymin)/2 + [`STATE_BOUND`] scales.
     i_half: T,
-    /// −[`STATE_BOUND`] scales: the derivative term's lower bound.
-    d_lo: T,
-    /// [`STATE_BOUND`] scales: the derivative term's upper bound.
-    d_hi: T,
+    /// [`STATE_BOUND`] scales: the derivative term's bound either way.
+    d_bound: T,
     i: T,
     d: T,
     r_old: T,
@@ -374,8 +372,7 @@ impl<T: Scalar> Pid<T> {
             offset_slope: zero,
             i_mid: zero,
             i_half: zero,
-            d_lo: zero,
-            d_hi: zero,
+            d_bound: zero,
             i: zero,
             d: zero,
             yd_old: zero,
@@ -403,8 +400,7 @@ impl<T: Scalar> Pid<T> {
         self.offset_slope = k.offset_slope;
         self.i_mid = k.i_mid;
         self.i_half = k.i_half;
-        self.d_lo = T::ZERO.sub(k.d_bound);
-        self.d_hi = k.d_bound;
+        self.d_bound = k.d_bound;
     }
 
     /// One sample: the output for set-point `r` and measurement `y`.
@@ -487,6 +483,8 @@ impl<T: Scalar> Pid<T> {
             return self.u_old;
         }
         s.i = bounded;
+        // The fast path runs only once started, so only this path marks it.
+        self.flags |= STARTED;
         self.commit(s, r, track)
     }
 
@@ -508,7 +506,7 @@ impl<T: Scalar> Pid<T> {
             .mul(self.d)
             .sub(self.bd.mul(yd.sub(yd_old)))
             .flush_tiny()
-            .clamp_within(self.d_lo, self.d_hi);
+            .clamp_within(T::ZERO.sub(self.d_bound), self.d_bound);
         if manual {
             let u = self.u_old;
             return Sample {
@@ -550,7 +548,6 @@ impl<T: Scalar> Pid<T> {
     /// Stores an accepted sample; returns its output.
     #[inline(always)]
     fn commit(&mut self, s: Sample<T>, r: T, track: Option<T>) -> T {
-        self.flags |= STARTED;
         self.i = s.i;
         self.d = s.d;
         self.yd_old = s.yd;
@@ -734,11 +731,11 @@ mod tests {
     }
 
     #[test]
-    fn size_is_20_values_and_3_bytes_padded() {
-        // 20 values of T, then the flags (started, manual) and the faults (2 bytes), padded to
+    fn size_is_19_values_and_2_bytes_padded() {
+        // 19 values of T, then the flags (started, manual) and the faults (2 bytes), padded to
         // T's alignment.
-        assert_eq!(core::mem::size_of::<Pid<f32>>(), 20 * 4 + 4);
-        assert_eq!(core::mem::size_of::<Pid<f64>>(), 20 * 8 + 8);
+        assert_eq!(core::mem::size_of::<Pid<f32>>(), 19 * 4 + 4);
+        assert_eq!(core::mem::size_of::<Pid<f64>>(), 19 * 8 + 8);
     }
 
     #[test]

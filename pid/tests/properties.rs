@@ -14,7 +14,7 @@ use proptest::prelude::{
     ProptestConfig, any, prop, prop_assert, prop_assert_eq, prop_oneof, proptest,
 };
 use proptest::strategy::{Just, Strategy};
-use regler_pid::{Action, Config, ConfigError, Kind, Mode, Parameter, Pid, STATE_BOUND};
+use regler_pid::{Action, Config, ConfigError, Inputs, Kind, Mode, Parameter, Pid, STATE_BOUND};
 
 /// The reference algorithm, written out as the design states it, with the documented state
 /// bounds (`STATE_BOUND` output scales).
@@ -297,6 +297,28 @@ proptest! {
     /// A change of configuration does not move the output, for every pair of kinds and at a
     /// non-zero error: the first output after the commit is what the old configuration would
     /// have given (derivative steady: constant readings).
+    /// A kind without I holds its bias (its manual reset) whatever the feed-forward, the
+    /// readings and the set-point do, absurd values included; only a mode switch or a new
+    /// configuration may move it.
+    #[test]
+    fn the_bias_of_a_kind_without_i_never_moves(
+        config in config().prop_filter("no I", |c| !c.kind.has_i()),
+        manual_output in -100.0f64..100.0,
+        samples in prop::collection::vec((reading(), reading(), reading()), 1..100),
+    ) {
+        let mut pid = Pid::<f64>::new(&config).unwrap();
+        pid.update(1.0, 0.0);
+        pid.set_manual(manual_output).unwrap();
+        pid.update(1.0, 0.0);
+        pid.set_auto();
+        let bias = pid.integral();
+        for (r, y, feedforward) in samples {
+            let feedforward = if feedforward.is_finite() { feedforward } else { 0.0 };
+            pid.update_with(r, y, Inputs { feedforward, track: None });
+            prop_assert_eq!(pid.integral(), bias);
+        }
+    }
+
     #[test]
     fn bumpless_commit(before in config(), after in config(), r in -10.0f64..10.0, y in -10.0f64..10.0) {
         let wide = |c: Config| Config { ymin: -1e6, ymax: 1e6, dymax: None, ..c };
