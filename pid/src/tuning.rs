@@ -497,6 +497,48 @@ impl<F: fmt::Display> fmt::Display for RelayError<F> {
 
 impl<F: fmt::Debug + fmt::Display> core::error::Error for RelayError<F> {}
 
+/// Why [`Relay::hand_over`] refused to hand the loop over.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum HandOverError<F = f64> {
+    /// The controller's action is not the experiment's: it would drive the loop to a limit.
+    Action {
+        /// The action the experiment ran with (the process's direction).
+        experiment: Action,
+        /// The action in the controller's configuration.
+        controller: Action,
+    },
+    /// The controller's configuration is not valid.
+    Config(ConfigError<F>),
+}
+
+const fn action_name(action: Action) -> &'static str {
+    match action {
+        Action::Direct => "direct",
+        Action::Reverse => "reverse",
+    }
+}
+
+impl<F: Real> fmt::Display for HandOverError<F> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Action {
+                experiment,
+                controller,
+            } => write!(
+                f,
+                "the relay experiment ran {}-acting but the controller is configured {}-acting: it would drive the loop to a limit",
+                action_name(*experiment),
+                action_name(*controller)
+            ),
+            Self::Config(e) => write!(f, "the tuned configuration: {e}"),
+        }
+    }
+}
+
+impl<F: Real> core::error::Error for HandOverError<F> {}
+
 /// What one sample of the experiment gives.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -538,9 +580,13 @@ const HISTORY: usize = 8;
 pub struct Relay<F = f64> {
     config: RelayConfig<F>,
     high: bool,
-    now: F,
-    /// Time of the last switch to high (a period boundary), once there was one.
-    last_rise: Option<F>,
+    /// Samples taken so far (an integer: a float clock `t += h` stops advancing once t/h
+    /// passes 2²⁴ in `f32`); every time is `count·h`, computed where it is used.
+    count: u64,
+    /// The sample count past which the experiment gives up: ⌊timeout/h⌋, computed once.
+    limit: u64,
+    /// Sample count of the last switch to high (a period boundary), once there was one.
+    last_rise: Option<u64>,
     y_max: F,
     y_min: F,
     periods: [(F, F); HISTORY],
@@ -581,10 +627,17 @@ impl<F: Real> Relay<F> {
                 "timeout must be finite and longer than h",
             ));
         }
+        // The time-out in samples, ⌊timeout/h⌋ rounded once in F: the same count in f32 and
+        // f64 whenever the quotient is exact in both (40 000 s at 1 ms: 40 000 000).
+        let Some(limit) = num_traits::ToPrimitive::to_u64(&(config.timeout / config.h).floor())
+        else {
+            return Err(RelayError::Config("timeout/h must be at most 2^64 samples"));
+        };
         Ok(Self {
             config,
             high: true,
-            now: F::zero(),
+            count: 0,
+            limit,
             last_rise: None,
             y_max: F::neg_infinity(),
             y_min: F::infinity(),
@@ -625,8 +678,8 @@ impl<F: Real> Relay<F> {
         if let Some(outcome) = self.outcome {
             return outcome.map(RelayStep::Done);
         }
-        self.now = self.now + self.config.h;
-        if self.now > self.config.timeout {
+        self.count = self.count.saturating_add(1);
+        if self.count > self.limit {
             return self.end(Err(RelayError::Timeout { periods: self.seen }));
         }
         if !(measurement.is_finite() && setpoint.is_finite()) {
@@ -665,7 +718,7 @@ impl<F: Real> Relay<F> {
 
     /// A rise closes a period: record it and see whether the last ones agree.
     fn period_ended(&mut self) -> Result<Option<Ultimate<F>>, RelayError<F>> {
-        let now = self.now;
+        let now = self.count;
         let two = F::from_u16(2);
         let amplitude = (self.y_max - self.y_min) / two;
         self.y_max = F::neg_infinity();
@@ -673,8 +726,10 @@ impl<F: Real> Relay<F> {
         let Some(start) = self.last_rise.replace(now) else {
             return Ok(None); // the first rise only starts the count
         };
-        let period = now - start;
-        if period < self.config.h * F::from_u16(4) {
+        let samples = now.saturating_sub(start);
+        // Rounded to F only now: a period of a few thousand samples is exact in f32.
+        let period = samples_to_real::<F>(samples) * self.config.h;
+        if samples < 4 {
             return Err(RelayError::Chattering { period });
         }
         self.periods.rotate_left(1);
@@ -726,20 +781,36 @@ impl<F: Real> Relay<F> {
     /// starts in manual at the relay's bias with this sample's set-point and measurement, then
     /// switches to automatic, so its first output continues from the bias.
     ///
+    /// The experiment's [`Action`] says which way the process answered; a controller of the
+    /// other action would push the loop away from the set-point to a limit, so it is refused.
+    ///
     /// # Errors
-    /// The configuration's validation error.
+    /// [`HandOverError::Action`] when `config.action` differs from the experiment's action
+    /// (every combination is checked); [`HandOverError::Config`], the configuration's
+    /// validation error.
     pub fn hand_over<T: Scalar>(
         &self,
         config: &Config<F>,
         setpoint: T,
         measurement: T,
-    ) -> Result<Pid<T>, ConfigError<F>> {
-        let mut pid = Pid::new(config)?;
+    ) -> Result<Pid<T>, HandOverError<F>> {
+        if config.action != self.config.action {
+            return Err(HandOverError::Action {
+                experiment: self.config.action,
+                controller: config.action,
+            });
+        }
+        let mut pid = Pid::new(config).map_err(HandOverError::Config)?;
         let _ = pid.set_manual(T::from_real(self.config.bias));
         let _ = pid.update(setpoint, measurement);
         pid.set_auto();
         Ok(pid)
     }
+}
+
+/// A sample count as F (nearest; every count below 2²⁴ exactly in `f32`).
+fn samples_to_real<F: Real>(n: u64) -> F {
+    <F as num_traits::NumCast>::from(n).unwrap_or_else(F::max_value)
 }
 
 /// √x for x ≥ 0 by Newton's iteration (FloatCore has no square root; `libm` is not needed for

@@ -377,3 +377,148 @@ fn step_identification_recovers_fopdt_models_and_names_what_it_cannot_fit() {
         Err(IdentifyError::Input("the step"))
     );
 }
+
+/// Issue 19 item 12: every combination of the experiment's and the controller's action; a
+/// mismatch is refused with both named, a match hands over.
+#[test]
+fn hand_over_refuses_a_controller_of_the_other_action() {
+    use regler_pid::Action;
+    use regler_pid::tuning::HandOverError;
+    for experiment in [Action::Direct, Action::Reverse] {
+        for controller in [Action::Direct, Action::Reverse] {
+            let relay = Relay::new(RelayConfig {
+                action: experiment,
+                ..config(0.01)
+            })
+            .unwrap();
+            let config = Config::<f64> {
+                h: 0.01,
+                kind: Kind::PI,
+                k: 1.0,
+                ti: 5.0,
+                action: controller,
+                ..Config::default()
+            };
+            let got = relay.hand_over::<f64>(&config, 0.0, 0.0);
+            if experiment == controller {
+                assert_eq!(got.unwrap().mode(), Mode::Auto);
+            } else {
+                let err = got.unwrap_err();
+                assert_eq!(
+                    err,
+                    HandOverError::Action {
+                        experiment,
+                        controller
+                    }
+                );
+                let text = err.to_string();
+                assert!(
+                    text.contains("direct") && text.contains("reverse"),
+                    "{text}"
+                );
+            }
+        }
+    }
+    // An invalid configuration is still named as such.
+    let relay = Relay::new(config(0.01)).unwrap();
+    let bad = Config::<f64> {
+        h: 0.01,
+        k: f64::NAN,
+        ..Config::default()
+    };
+    assert!(matches!(
+        relay.hand_over::<f64>(&bad, 0.0, 0.0),
+        Err(HandOverError::Config(_))
+    ));
+}
+
+/// Samples until the relay gives up on a process that never answers (at most `bound`).
+fn samples_to_timeout<F: regler_pid::Real>(h: F, timeout: F, bound: u64) -> Option<u64> {
+    let mut relay = Relay::new(RelayConfig::<F> {
+        h,
+        timeout,
+        ..RelayConfig::default()
+    })
+    .unwrap();
+    let zero = F::zero();
+    for n in 1..=bound {
+        match relay.update(zero, zero) {
+            Ok(_) => {}
+            Err(RelayError::Timeout { .. }) => return Some(n),
+            Err(e) => panic!("{e}"),
+        }
+    }
+    None
+}
+
+/// Issue 19 item 13: the time-out is a sample count: f32 gives up at the same sample as f64
+/// (⌊timeout/h⌋ + 1), also where an f32 clock `t += h` stalls (h = 1 ms, 40 000 s: t/h ≈ 4·10⁷
+/// > 2²⁴).
+#[test]
+fn the_f32_relay_times_out_at_the_same_sample_as_the_f64_one() {
+    for (h, timeout) in [(1e-3, 40_000.0), (0.1, 60.0), (0.01, 1_000.0)] {
+        let expected = (timeout / h) as u64 + 1;
+        let bound = expected + 10;
+        assert_eq!(samples_to_timeout::<f64>(h, timeout, bound), Some(expected));
+        assert_eq!(
+            samples_to_timeout::<f32>(h as f32, timeout as f32, bound),
+            Some(expected),
+            "f32, h {h}, timeout {timeout}"
+        );
+    }
+    // A time-out whose sample count does not fit the counter is refused, one that does works.
+    assert!(matches!(
+        Relay::new(RelayConfig::<f64> {
+            h: 1e-300,
+            timeout: 1e300,
+            ..RelayConfig::default()
+        }),
+        Err(RelayError::Config(_))
+    ));
+    assert!(
+        Relay::new(RelayConfig::<f64> {
+            h: 1e-6,
+            timeout: 40_000.0,
+            ..RelayConfig::default()
+        })
+        .is_ok()
+    );
+}
+
+/// Issue 19 item 13: Tu is right in f32 when the oscillation starts late (after 10⁵ to 2·10⁷
+/// samples of a process that does not answer yet; h = 1 ms; past 2¹⁴ s an f32 clock rounds each
+/// step of 1 ms to 2 ms): the period is a difference of
+/// sample counts, not of two large float times.
+#[test]
+fn the_f32_relay_measures_a_late_oscillation_right() {
+    let h = 1e-3f32;
+    let truth = lag_chain_ultimate(3);
+    for late in [100_000u64, 10_000_000, 20_000_000] {
+        let mut relay = Relay::new(RelayConfig::<f32> {
+            h,
+            hysteresis: 0.002,
+            timeout: 40_000.0,
+            ..RelayConfig::default()
+        })
+        .unwrap();
+        // Not connected yet: the measurement sits below the set-point, the relay stays high.
+        for _ in 0..late {
+            assert!(matches!(relay.update(0.0, -1.0), Ok(RelayStep::Running(_))));
+        }
+        let mut process = Process::new(3, 1.0, 0.0, f64::from(h));
+        let found = loop {
+            match relay.update(0.0, process.output() as f32).unwrap() {
+                RelayStep::Running(u) => process.step(f64::from(u)),
+                RelayStep::Done(found) => break found,
+            }
+        };
+        let tu_err = f64::from(found.tu) / truth.tu - 1.0;
+        let ku_err = f64::from(found.ku) / truth.ku - 1.0;
+        assert!(tu_err.abs() <= 0.05, "after {late}: Tu {}", found.tu);
+        assert!(
+            (-0.05..=0.01).contains(&ku_err),
+            "after {late}: Ku {}",
+            found.ku
+        );
+    }
+}
