@@ -6,8 +6,26 @@
 //! or a wanted change (velocity form, [`ThreePoint::update_delta`]) into one pulse per sample,
 //! keeps an estimate of where the actuator stands (it has no position feedback), and never winds
 //! up at the ends: a request beyond fully open or fully closed is dropped, not stored, so the
-//! first request back moves the actuator at once. Requests smaller than the dead band or the
-//! minimum pulse wait and add up; an end-position switch re-anchors the estimate.
+//! first request back moves the actuator at once. An end-position switch re-anchors the
+//! estimate.
+//!
+//! # What the driver guarantees (tested in `tests/actuator.rs` for every configuration the
+//! constructor accepts)
+//! - Every pulse is one the motor can make: [`Drive::Stop`], or `Open(s)`/`Close(s)` with
+//!   0 < s and `min_pulse` ≤ s ≤ `h` (s is the pulse's length in seconds within this sample),
+//!   in both forms.
+//! - Positional form: an error smaller than [`smallest_move`](ThreePoint::smallest_move) (the
+//!   dead band or one minimum pulse's travel `min_pulse / run_time`, the larger) is not driven,
+//!   and no pulse carries the estimate past the target, so a target held constant gives at most
+//!   one reversal (the one away from where the actuator was going), from any start, over any
+//!   horizon; the actuator ends within `smallest_move()` of the target. A target at an end is
+//!   driven into the stop (at least one minimum pulse; the stop ends it): a valve asked to shut,
+//!   shuts.
+//! - Velocity form: requests smaller than `smallest_move()` wait and add up.
+//! - The estimate stays in 0..=1 and follows a motor that moves `s / run_time` per pulse and
+//!   stops at its ends.
+//! - Refused by [`ThreePoint::new`]: a run time or h that is not finite and positive, a minimum
+//!   pulse outside 0..=h or longer than the run time, a dead band outside 0..1.
 //!
 //! With a positional [`Pid`](crate::Pid), feed the *changes* of its output to
 //! [`update_delta`](ThreePoint::update_delta) (the velocity form): changes too small for a pulse
@@ -31,7 +49,8 @@ use crate::Real;
 pub struct ActuatorConfig<F = f64> {
     /// GT: seconds from fully closed to fully open.
     pub run_time: F,
-    /// The shortest pulse the motor and its relay take, seconds (at most `h`).
+    /// The shortest pulse the motor and its relay take, seconds (at most `h` and at most
+    /// `run_time`).
     pub min_pulse: F,
     /// Position errors smaller than this (fraction of the stroke) are not driven: no hunting.
     pub dead_band: F,
@@ -119,6 +138,11 @@ impl<F: Real> ThreePoint<F> {
         {
             return Err(ActuatorError::Config("min_pulse must be in 0..=h"));
         }
+        if config.min_pulse > config.run_time {
+            return Err(ActuatorError::Config(
+                "min_pulse must not exceed run_time: the shortest pulse would move the actuator more than its whole stroke",
+            ));
+        }
         if !(config.dead_band.is_finite()
             && config.dead_band >= F::zero()
             && config.dead_band < F::one())
@@ -148,7 +172,23 @@ impl<F: Real> ThreePoint<F> {
         self.driven
     }
 
+    /// The smallest position error the driver moves for: the dead band, or what one minimum
+    /// pulse moves the actuator (`min_pulse / run_time`), whichever is larger.
+    #[must_use]
+    pub fn smallest_move(&self) -> F {
+        self.config
+            .dead_band
+            .max(self.config.min_pulse / self.config.run_time)
+    }
+
     /// Positional form: drive toward `target` (clamped into 0..=1).
+    ///
+    /// An error smaller than [`smallest_move`](Self::smallest_move) is not driven: a minimum
+    /// pulse would carry the actuator past the target and the next sample back (hunting). A
+    /// pulse never carries the estimate past the target, so a target held constant is
+    /// approached from one side only: no reversal. A target at an end (0 or 1 after clamping)
+    /// is driven all the way into the stop, at least one minimum pulse, whatever the dead band:
+    /// the stop ends the pulse (harmless) and a valve asked to shut, shuts.
     ///
     /// # Errors
     /// [`ActuatorError::NotFinite`]: the request is ignored and the actuator stops.
@@ -157,12 +197,13 @@ impl<F: Real> ThreePoint<F> {
             return Err(ActuatorError::NotFinite);
         }
         let target = clamp01(target);
-        let error = target - self.position;
         self.pending = F::zero();
-        if error.abs() < self.config.dead_band {
+        let error = target - self.position;
+        let at_end = target == F::zero() || target == F::one();
+        if error == F::zero() || (!at_end && error.abs() < self.smallest_move()) {
             return Ok(Drive::Stop);
         }
-        Ok(self.drive(error))
+        Ok(self.drive(target))
     }
 
     /// Velocity form: the controller asks for a change of `delta` (fraction of the stroke).
@@ -176,17 +217,13 @@ impl<F: Real> ThreePoint<F> {
             return Err(ActuatorError::NotFinite);
         }
         // Never ask for more than the stroke has left.
-        self.pending = clamp01(self.position + self.pending + delta) - self.position;
-        let smallest = self
-            .config
-            .dead_band
-            .max(self.config.min_pulse / self.config.run_time);
-        if self.pending.abs() < smallest {
+        let target = clamp01(self.position + self.pending + delta);
+        self.pending = target - self.position;
+        if self.pending == F::zero() || self.pending.abs() < self.smallest_move() {
             return Ok(Drive::Stop);
         }
-        let before = self.position;
-        let drive = self.drive(self.pending);
-        self.pending = self.pending - (self.position - before);
+        let drive = self.drive(target);
+        self.pending = target - self.position;
         Ok(drive)
     }
 
@@ -196,31 +233,30 @@ impl<F: Real> ThreePoint<F> {
         self.pending = F::zero();
     }
 
-    /// One pulse toward `error` (fraction of the stroke), at most one sample long, at least the
-    /// minimum pulse; the position estimate moves with it.
-    fn drive(&mut self, error: F) -> Drive<F> {
+    /// One pulse toward `target` (in 0..=1, not the estimate), at most one sample long and at
+    /// least the minimum pulse; the estimate moves with it and never past the target. The
+    /// callers ask only for errors of at least a minimum pulse's travel, or for an end (which
+    /// stops the actuator): lengthening a pulse to `min_pulse` then only absorbs rounding or
+    /// runs into the stop.
+    fn drive(&mut self, target: F) -> Drive<F> {
         let gt = self.config.run_time;
-        let mut seconds = (error.abs() * gt).min(self.config.h);
-        if seconds < self.config.min_pulse {
-            seconds = self.config.min_pulse;
+        let error = target - self.position;
+        let wanted = error.abs() * gt;
+        let seconds = wanted.min(self.config.h).max(self.config.min_pulse);
+        if !(seconds > F::zero()) {
+            return Drive::Stop; // an error too small to be a time (underflow)
         }
-        // Not past the end: the estimate stops where the actuator does.
-        let room = if error > F::zero() {
-            F::one() - self.position
+        self.position = if wanted <= seconds {
+            target // the pulse covers the whole error (or runs into the stop)
+        } else if error > F::zero() {
+            clamp01((self.position + seconds / gt).min(target))
         } else {
-            self.position
+            clamp01((self.position - seconds / gt).max(target))
         };
-        seconds = seconds.min(room * gt);
-        if seconds <= F::zero() {
-            return Drive::Stop;
-        }
-        let moved = seconds / gt;
         if error > F::zero() {
-            self.position = clamp01(self.position + moved);
             self.driven.0 = self.driven.0 + seconds;
             Drive::Open(seconds)
         } else {
-            self.position = clamp01(self.position - moved);
             self.driven.1 = self.driven.1 + seconds;
             Drive::Close(seconds)
         }
