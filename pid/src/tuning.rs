@@ -12,8 +12,39 @@
 //! - Rules: [`ziegler_nichols`] (classic, from Ku and Tu), [`amigo`] (Åström–Hägglund's AMIGO,
 //!   from a first-order-plus-dead-time model), [`simc`] (Skogestad's SIMC, from the same model).
 //!   Each gives a [`Tuning`] that [`Tuning::apply`] writes into a [`Config`].
-//! - [`identify_step`]: a first-order-plus-dead-time model from a logged step response (method
-//!   of areas), for the model-based rules.
+//! - [`identify_step_at`] (and [`identify_step`], the log starting at the step): a
+//!   first-order-plus-dead-time model from a logged step response (method of areas), for the
+//!   model-based rules.
+//!
+//! The relay counts its samples in a `u64` and computes every time as count·h where it is used
+//! (an `f32` clock `t += h` stops advancing): in `f32` and `f64` it gives up at the same sample,
+//! ⌊timeout/h⌋ + 1 (when timeout/h is exact in both; a time-out of more than 2⁶⁴ samples is
+//! refused), and a period is a difference of counts however late the oscillation starts.
+//! [`Relay::hand_over`] refuses a controller whose [`Action`] is not the experiment's.
+//!
+//! # What the step identification accepts and how close it gets
+//! Tested in `tests/tuning.rs` (property over K of either sign from 0.01 to 100, T from 0.1 to
+//! 100 s, L from 0 to 3T, 30 to 3 000 samples per T + L, logs reaching 8 to 20 time constants
+//! past the dead time, any baseline and step, uniform noise of peak up to 2 % of the change
+//! with 20 to 500 samples before the step, in `f64` and `f32`; and logs of 0.7 and 3 million
+//! samples): K is within 1 % + ν and T and L within 2 % of T + L, plus h, plus ν·(T + L), where
+//! ν is the noise's peak as a fraction of the change. Without samples before the step the
+//! baseline is one sample and its noise enters the model unaveraged (tested noise-free only).
+//!
+//! The response is refused, never fitted, when (with "noise" the larger of the largest
+//! deviations from the mean before the step and in the last tenth):
+//! - it has not settled: the last tenth's first and last thirds differ by more than 2 % of the
+//!   change ([`IdentifyError::NotSettled`]; an integrating process's ramp ends here);
+//! - the change is within twice the noise ([`IdentifyError::NoResponse`]);
+//! - it rises above its final level (the last thirtieth's mean) by more than 1 % of the change
+//!   plus twice the noise ([`IdentifyError::Overshoot`]: an underdamped or oscillating
+//!   response), or first goes the wrong way by as much ([`IdentifyError::Undershoot`]: an
+//!   inverse response);
+//! - the fitted T is not positive or L is below −h ([`IdentifyError::NotFopdt`]).
+//!
+//! Tested: second-order responses with an overshoot of 2 % or more, inverse responses that go
+//! the wrong way by 2 % or more, sustained oscillations of 2 % or more and integrating
+//! processes, with noise up to 0.2 % of the change, all give an error.
 //!
 //! # How close the relay gets
 //! The estimate rests on the describing function, which keeps only the fundamental of the
@@ -250,26 +281,43 @@ pub fn simc<F: Real>(model: Fopdt<F>, tc: F) -> Result<Tuning<F>, RuleError> {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum IdentifyError<F = f64> {
-    /// Fewer than 20 samples.
+    /// Fewer than 20 samples from the step on.
     TooFewSamples(usize),
     /// The sample period or the step size is not finite and non-zero.
     Input(&'static str),
+    /// The step index is not inside the log (the index, the log's length).
+    StepOutsideLog(usize, usize),
     /// A sample is not finite (at this index).
     NotFinite(usize),
-    /// The response has not settled: its last tenth still moves by this fraction of the change.
+    /// The response has not settled: its last tenth still moves by this fraction of the change
+    /// (e.g. an integrating process, whose step response is a ramp).
     NotSettled(F),
-    /// The process did not respond (its change is below the samples' own spread).
+    /// The process did not respond (its change is within twice the samples' noise).
     NoResponse,
-    /// The response is not of the first-order-plus-dead-time kind (the fitted time constant or
-    /// dead time came out negative: e.g. an overshooting or inverse response).
+    /// The response rises above its final value by this fraction of the change: an overshoot
+    /// or an oscillation, which a first-order-plus-dead-time response never has.
+    Overshoot(F),
+    /// The response first moves the wrong way, by this fraction of the change: an inverse
+    /// response, which a first-order-plus-dead-time response never has.
+    Undershoot(F),
+    /// The response is not of the first-order-plus-dead-time kind (the fitted time constant
+    /// came out not positive or the dead time clearly negative).
     NotFopdt,
 }
 
 impl<F: fmt::Display> fmt::Display for IdentifyError<F> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::TooFewSamples(n) => write!(f, "{n} samples: at least 20 are needed"),
+            Self::TooFewSamples(n) => {
+                write!(f, "{n} samples from the step on: at least 20 are needed")
+            }
             Self::Input(what) => write!(f, "{what} must be finite and non-zero"),
+            Self::StepOutsideLog(at, len) => {
+                write!(
+                    f,
+                    "the step at sample {at} is outside the log of {len} samples"
+                )
+            }
             Self::NotFinite(k) => write!(f, "sample {k} is not finite"),
             Self::NotSettled(moving) => {
                 write!(
@@ -278,6 +326,14 @@ impl<F: fmt::Display> fmt::Display for IdentifyError<F> {
                 )
             }
             Self::NoResponse => f.write_str("the process did not respond to the step"),
+            Self::Overshoot(by) => write!(
+                f,
+                "the response overshoots its final value by {by} of the change: not a first-order-plus-dead-time process"
+            ),
+            Self::Undershoot(by) => write!(
+                f,
+                "the response first moves the wrong way by {by} of the change (inverse response): not a first-order-plus-dead-time process"
+            ),
             Self::NotFopdt => {
                 f.write_str("the response does not fit a first-order-plus-dead-time model")
             }
@@ -287,15 +343,62 @@ impl<F: fmt::Display> fmt::Display for IdentifyError<F> {
 
 impl<F: fmt::Debug + fmt::Display> core::error::Error for IdentifyError<F> {}
 
-/// A first-order-plus-dead-time model from a logged open-loop step response, by the method of
-/// areas (Åström & Hägglund): with s(t) the response per unit step, K = s(∞),
-/// A0 = ∫(K − s) dt = K·(T + L) and A1 = ∫₀^(T+L) s dt = K·T/e, so T = e·A1/K and
-/// L = A0/K − T. Areas average over many samples, so the method tolerates noise far better than
-/// reading two crossing times off the curve; for an FOPDT process it is exact up to the sampling.
-///
-/// `samples[0]` is the measurement at the instant of the step (the baseline), one sample every
-/// `h` seconds after it, long enough to settle; `step` is the change of the controller output.
-/// The final value is the mean of the last tenth.
+/// Compensated (Neumaier) summation: the error stays a few ulps of the sum, independent of the
+/// number of terms (a plain f32 sum of 10⁶ samples loses about 3 decimal digits).
+#[derive(Clone, Copy)]
+struct Sum<F> {
+    sum: F,
+    carry: F,
+}
+
+impl<F: Real> Sum<F> {
+    fn new() -> Self {
+        Self {
+            sum: F::zero(),
+            carry: F::zero(),
+        }
+    }
+
+    fn add(&mut self, v: F) {
+        let t = self.sum + v;
+        if self.sum.abs() >= v.abs() {
+            self.carry = self.carry + ((self.sum - t) + v);
+        } else {
+            self.carry = self.carry + ((v - t) + self.sum);
+        }
+        self.sum = t;
+    }
+
+    fn value(self) -> F {
+        self.sum + self.carry
+    }
+}
+
+/// A count as F (nearest: exact below 2²⁴ in `f32`, relative error below 10⁻⁷ above).
+fn count<F: Real>(n: usize) -> F {
+    <F as num_traits::NumCast>::from(n).unwrap_or_else(F::max_value)
+}
+
+/// The compensated mean of a non-empty slice, and the largest deviation from it.
+fn mean_and_spread<F: Real>(part: &[F]) -> (F, F) {
+    let mut s = Sum::new();
+    for &v in part {
+        s.add(v);
+    }
+    let mean = s.value() / count::<F>(part.len().max(1));
+    let mut spread = F::zero();
+    for &v in part {
+        let d = (v - mean).abs();
+        spread = if d > spread { d } else { spread };
+    }
+    (mean, spread)
+}
+
+/// A first-order-plus-dead-time model from a logged open-loop step response whose first sample
+/// is the instant of the step: [`identify_step_at`] with no samples before the step, so the
+/// baseline is the single sample `samples[0]` and its noise goes straight into K and the areas
+/// (±5 % noise on it moves L by about ±25 %). Log a few seconds before the step and use
+/// [`identify_step_at`] when the measurement is noisy.
 ///
 /// ```
 /// use regler_pid::tuning::identify_step;
@@ -315,9 +418,38 @@ impl<F: fmt::Debug + fmt::Display> core::error::Error for IdentifyError<F> {}
 /// ```
 ///
 /// # Errors
-/// See [`IdentifyError`].
+/// See [`IdentifyError`] and [`identify_step_at`].
 pub fn identify_step<F: Real>(samples: &[F], h: F, step: F) -> Result<Fopdt<F>, IdentifyError<F>> {
-    let n = samples.len();
+    identify_step_at(samples, 0, h, step)
+}
+
+/// A first-order-plus-dead-time model from a logged open-loop step response, by the method of
+/// areas (Åström & Hägglund): with r(t) the response normalised to go from 0 to 1,
+/// A0 = ∫(1 − r) dt = T + L and A1 = ∫₀^(T+L) r dt = T/e, so T = e·A1 and L = A0 − T; K is the
+/// change over the step. Areas average over many samples, so the method tolerates noise far
+/// better than reading two crossing times off the curve.
+///
+/// `samples[..step_at]` were logged before the step, `samples[step_at]` at the instant of the
+/// step (before the process could answer), one sample every `h` seconds; `step` is the change of
+/// the controller output. The baseline is the mean of `samples[..=step_at]`, the final value
+/// the mean of the last tenth of the samples from the step on (at least 2); every sum is
+/// compensated, so logs of millions of samples lose no precision in `f32`. Counts are `usize`.
+///
+/// The response must look like an FOPDT response; otherwise the function names why (see the
+/// [module](self) docs for the exact rules and the tolerances tested).
+///
+/// # Errors
+/// See [`IdentifyError`].
+pub fn identify_step_at<F: Real>(
+    samples: &[F],
+    step_at: usize,
+    h: F,
+    step: F,
+) -> Result<Fopdt<F>, IdentifyError<F>> {
+    let Some(response) = samples.get(step_at..).filter(|r| !r.is_empty()) else {
+        return Err(IdentifyError::StepOutsideLog(step_at, samples.len()));
+    };
+    let n = response.len();
     if n < 20 {
         return Err(IdentifyError::TooFewSamples(n));
     }
@@ -330,65 +462,78 @@ pub fn identify_step<F: Real>(samples: &[F], h: F, step: F) -> Result<Fopdt<F>, 
     if let Some(k) = samples.iter().position(|v| !v.is_finite()) {
         return Err(IdentifyError::NotFinite(k));
     }
-    let y0 = samples.first().copied().unwrap_or_else(F::zero);
+    let before = samples.get(..=step_at).unwrap_or(&[]);
+    let (y0, pre_noise) = mean_and_spread(before);
     let tail_len = (n / 10).max(2);
-    let tail = samples.get(n.saturating_sub(tail_len)..).unwrap_or(&[]);
-    let mut sum = F::zero();
-    let (mut lo, mut hi) = (F::infinity(), F::neg_infinity());
-    for &v in tail {
-        sum = sum + v;
-        lo = if v < lo { v } else { lo };
-        hi = if v > hi { v } else { hi };
-    }
-    let count = F::from_u16(u16::try_from(tail.len()).unwrap_or(u16::MAX));
-    let y_final = sum / count;
+    let tail = response.get(n.saturating_sub(tail_len)..).unwrap_or(&[]);
+    let (y_final, tail_noise) = mean_and_spread(tail);
+    let noise = if pre_noise > tail_noise {
+        pre_noise
+    } else {
+        tail_noise
+    };
     let change = y_final - y0;
-    if change.abs() <= (hi - lo) || change == F::zero() {
+    let two = F::from_u16(2);
+    if !(change.abs() > two * noise) || !change.is_finite() {
         return Err(IdentifyError::NoResponse);
     }
     // Settled: the tail's first and last thirds agree to 2 % of the change.
     let third = (tail.len() / 3).max(1);
-    let mean = |part: &[F]| {
-        let mut s = F::zero();
-        for &v in part {
-            s = s + v;
-        }
-        s / F::from_u16(u16::try_from(part.len().max(1)).unwrap_or(u16::MAX))
-    };
-    let early = mean(tail.get(..third).unwrap_or(&[]));
-    let late = mean(tail.get(tail.len().saturating_sub(third)..).unwrap_or(&[]));
+    let (early, _) = mean_and_spread(tail.get(..third).unwrap_or(&[]));
+    let (late, _) = mean_and_spread(tail.get(tail.len().saturating_sub(third)..).unwrap_or(&[]));
     let moving = ((late - early) / change).abs();
     if moving > c(0.02) {
         return Err(IdentifyError::NotSettled(moving));
     }
-    let k = change / step;
-    // Per-unit response s(t) = (y − y0)/step; areas by the trapezoidal rule.
+    // The normalised response r = (y − y0)/change goes from 0 to 1 and never leaves 0..=1
+    // for an FOPDT process; beyond 1 % of the change plus twice the noise it is another shape.
+    let unit = |v: F| (v - y0) / change;
+    let margin = c::<F>(0.01) + two * noise / change.abs();
+    let (mut lo, mut hi) = (F::infinity(), F::neg_infinity());
+    for &v in response {
+        let r = unit(v);
+        lo = if r < lo { r } else { lo };
+        hi = if r > hi { r } else { hi };
+    }
+    let overshoot = hi - unit(late);
+    if overshoot > margin {
+        return Err(IdentifyError::Overshoot(overshoot));
+    }
+    if -lo > margin {
+        return Err(IdentifyError::Undershoot(-lo));
+    }
+    // A0 = ∫(1 − r) dt by the trapezoidal rule: h·(Σ(1 − r) − ends/2).
     let half = c::<F>(0.5);
-    let unit = |v: F| (v - y0) / step;
-    let mut a0 = F::zero();
-    for pair in samples.windows(2) {
-        if let [a, b] = pair {
-            a0 = a0 + (k - unit(*a) + k - unit(*b)) * half * h;
-        }
+    let first = F::one() - unit(response.first().copied().unwrap_or(y0));
+    let last = F::one() - unit(response.last().copied().unwrap_or(y_final));
+    let mut a0 = Sum::new();
+    for &v in response {
+        a0.add(F::one() - unit(v));
     }
-    let t_ar = a0 / k; // T + L
-    let mut a1 = F::zero();
-    let mut t = F::zero();
-    for pair in samples.windows(2) {
-        if let [a, b] = pair {
-            if t + h <= t_ar {
-                a1 = a1 + (unit(*a) + unit(*b)) * half * h;
-            } else if t < t_ar {
-                // The last, partial interval: linear interpolation up to T + L.
-                let frac = (t_ar - t) / h;
-                let end = unit(*a) + (unit(*b) - unit(*a)) * frac;
-                a1 = a1 + (unit(*a) + end) * half * (t_ar - t);
-            }
+    a0.add(-(first + last) * half);
+    let t_ar = a0.value() * h; // T + L
+    // A1 = ∫₀^(T+L) r dt: whole intervals up to ⌊(T+L)/h⌋, then the partial one interpolated.
+    let whole = num_traits::ToPrimitive::to_usize(&(t_ar / h).floor());
+    let Some(whole) = whole.filter(|&w| w.saturating_add(1) < n) else {
+        return Err(IdentifyError::NotFopdt); // T + L not positive, or beyond the log
+    };
+    let mut a1 = Sum::new();
+    let mut previous = F::zero();
+    for (i, &v) in response.iter().enumerate().take(whole.saturating_add(1)) {
+        let r = unit(v);
+        if i > 0 {
+            a1.add((previous + r) * half);
         }
-        t = t + h;
+        previous = r;
     }
+    let frac = t_ar / h - count::<F>(whole);
+    let next = response
+        .get(whole.saturating_add(1))
+        .map_or(previous, |&v| unit(v));
+    let end = previous + (next - previous) * frac;
+    a1.add((previous + end) * half * frac);
     let e = F::from_f64_nearest(core::f64::consts::E);
-    let time_constant = e * a1 / k;
+    let time_constant = e * a1.value() * h;
     let dead_time = t_ar - time_constant;
     // A dead time a little below zero is sampling error; clearly negative is another shape.
     if time_constant.is_nan() || time_constant <= F::zero() || dead_time < -h {
@@ -400,7 +545,7 @@ pub fn identify_step<F: Real>(samples: &[F], h: F, step: F) -> Result<Fopdt<F>, 
         F::zero()
     };
     Ok(Fopdt {
-        gain: k,
+        gain: change / step,
         time_constant,
         dead_time,
     })

@@ -522,3 +522,205 @@ fn the_f32_relay_measures_a_late_oscillation_right() {
         );
     }
 }
+
+/// Issue 19 item 10: a log of an analytic response `f(t)` (per unit step, t from the step),
+/// with `pre` samples before the step, a baseline, a step and uniform noise of peak `noise`
+/// (in output units), in `F`.
+fn log_of<F: regler_pid::Real>(
+    f: impl Fn(f64) -> f64,
+    pre: usize,
+    n: usize,
+    h: f64,
+    base: f64,
+    gain_step: f64,
+    noise: f64,
+    seed: u64,
+) -> Vec<F> {
+    let mut state = seed | 1;
+    (0..pre + n)
+        .map(|i| {
+            // xorshift64*: uniform in −1..1.
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            let u = (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64;
+            let t = (i as f64 - pre as f64) * h;
+            let y = base + gain_step * if t <= 0.0 { 0.0 } else { f(t) } + noise * (2.0 * u - 1.0);
+            F::from_f64_nearest(y)
+        })
+        .collect()
+}
+
+fn fopdt_response(t_c: f64, l: f64) -> impl Fn(f64) -> f64 {
+    move |t| {
+        if t <= l {
+            0.0
+        } else {
+            1.0 - (-(t - l) / t_c).exp()
+        }
+    }
+}
+
+/// The tolerance the module docs state: K within 1 % + noise/|K·step|, T and L within
+/// 2 % of T + L, plus h, plus (noise/|K·step|)·(T + L).
+fn within_tolerance(
+    m: &regler_pid::tuning::Fopdt,
+    k: f64,
+    t: f64,
+    l: f64,
+    h: f64,
+    relative_noise: f64,
+) -> bool {
+    let tl = t + l;
+    let slack = 0.02 * tl + h + relative_noise * tl;
+    (m.gain / k - 1.0).abs() <= 0.01 + relative_noise
+        && (m.time_constant - t).abs() <= slack
+        && (m.dead_time - l).abs() <= slack
+}
+
+fn identify<F: regler_pid::Real>(
+    y: &[F],
+    pre: usize,
+    h: f64,
+    step: f64,
+) -> Result<regler_pid::tuning::Fopdt, String> {
+    regler_pid::tuning::identify_step_at(y, pre, F::from_f64_nearest(h), F::from_f64_nearest(step))
+        .map(|m| regler_pid::tuning::Fopdt {
+            gain: m.gain.to_f64_exact(),
+            time_constant: m.time_constant.to_f64_exact(),
+            dead_time: m.dead_time.to_f64_exact(),
+        })
+        .map_err(|e| e.to_string())
+}
+
+mod identify_properties {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        /// Any FOPDT process (K of either sign over four decades, T over three, L from 0 to 3T,
+        /// 30 to 3 000 samples per T + L, logged 8 to 20 time constants past the dead time,
+        /// any baseline and step, uniform noise up to 2 % of the change with at least 20
+        /// samples before the step) gives a model within the stated tolerance, in f64 and f32.
+        #[test]
+        fn any_fopdt_is_recovered_within_the_stated_tolerance(
+            k_mag in 0.01f64..100.0,
+            negative in any::<bool>(),
+            t in 0.1f64..100.0,
+            l_in_t in 0.0f64..3.0,
+            per_tl in 30.0f64..3000.0,
+            settle in 8.0f64..20.0,
+            base in -100.0f64..100.0,
+            step in 0.1f64..10.0,
+            noisy in any::<bool>(),
+            relative_noise in 0.0f64..0.02,
+            pre in 20usize..500,
+            seed in any::<u64>(),
+        ) {
+            let k = if negative { -k_mag } else { k_mag };
+            let l = l_in_t * t;
+            let h = (t + l) / per_tl;
+            let n = ((l + settle * t) / h) as usize;
+            let relative_noise = if noisy { relative_noise } else { 0.0 };
+            let noise = relative_noise * (k * step).abs();
+            let pre = if noisy { pre } else { pre % 2 * pre };
+            let f = fopdt_response(t, l);
+            let y64 = log_of::<f64>(&f, pre, n, h, base, k * step, noise, seed);
+            let m = identify(&y64, pre, h, step).map_err(TestCaseError::fail)?;
+            prop_assert!(within_tolerance(&m, k, t, l, h, relative_noise), "f64 {m:?}");
+            // f32: the baseline must not swamp the change in f32's 24 bits.
+            prop_assume!(base.abs() < 1e3 * (k * step).abs());
+            let y32 = log_of::<f32>(&f, pre, n, h, base, k * step, noise, seed);
+            let m = identify(&y32, pre, h, step).map_err(TestCaseError::fail)?;
+            prop_assert!(within_tolerance(&m, k, t, l, h, relative_noise), "f32 {m:?}");
+        }
+
+        /// Responses a first-order-plus-dead-time model cannot represent give an error, never a
+        /// model: second order with an overshoot of 2 % or more, an inverse response that first
+        /// goes the wrong way by 2 % or more, a sustained oscillation of 2 % or more, an
+        /// integrating process (a ramp); noise up to 0.2 % of the change.
+        #[test]
+        fn any_response_it_cannot_represent_is_an_error(
+            shape in 0usize..4,
+            zeta in 0.05f64..0.77,
+            w in 0.05f64..5.0,
+            l in 0.0f64..5.0,
+            a in 0.1f64..10.0,
+            t1 in 0.5f64..10.0,
+            t2_in_t1 in 0.05f64..0.95,
+            k in -10.0f64..10.0,
+            relative_noise in 0.0f64..0.002,
+            seed in any::<u64>(),
+        ) {
+            prop_assume!(k.abs() > 0.01);
+            let t2 = t2_in_t1 * t1;
+            let (f, span): (Box<dyn Fn(f64) -> f64>, f64) = match shape {
+                0 => {
+                    // ωn = w, damping ζ: overshoot e^(−πζ/√(1−ζ²)) ≥ 2.26 %.
+                    let wd = w * (1.0 - zeta * zeta).sqrt();
+                    let phi = (zeta / (1.0 - zeta * zeta).sqrt()).atan();
+                    (Box::new(move |t: f64| if t <= l { 0.0 } else {
+                        let s = t - l;
+                        1.0 - (-zeta * w * s).exp() * ((wd * s).cos() + phi.tan() * (wd * s).sin())
+                    }), l + 12.0 / (zeta * w))
+                }
+                1 => {
+                    // (1 − a·s)/((1 + T1 s)(1 + T2 s)).
+                    (Box::new(move |t: f64| if t <= l { 0.0 } else {
+                        let s = t - l;
+                        1.0 - (t1 + a) / (t1 - t2) * (-s / t1).exp() + (t2 + a) / (t1 - t2) * (-s / t2).exp()
+                    }), l + 15.0 * t1)
+                }
+                2 => (Box::new(move |t: f64| if t <= l { 0.0 } else {
+                        1.0 + (0.02 + zeta) * (w * (t - l)).sin()
+                    }), l + 40.0 / w),
+                _ => (Box::new(move |t: f64| if t <= l { 0.0 } else {
+                        let s = t - l;
+                        (s - t1 * (1.0 - (-s / t1).exp())) / t1
+                    }), l + 20.0 * t1),
+            };
+            let h = span / 4000.0;
+            let n = (span / h) as usize;
+            if shape == 1 {
+                // Only inverse responses that go the wrong way by 2 % or more.
+                let lowest = (0..n).map(|i| f(i as f64 * h)).fold(f64::INFINITY, f64::min);
+                prop_assume!(lowest <= -0.02);
+            }
+            let noise = relative_noise * k.abs();
+            for pre in [0usize, 100] {
+                let y = log_of::<f64>(&f, pre, n, h, 5.0, k, noise, seed);
+                let got = identify(&y, pre, h, 1.0);
+                prop_assert!(got.is_err(), "shape {shape}: {got:?}");
+            }
+        }
+    }
+}
+
+/// Issue 19 item 10, the reported case and beyond: 700 000 and 3 000 000 samples of
+/// 2·e^(−5s)/(1 + 60s) (the tail is 70 000 and 300 000 samples, beyond u16), in f64 and f32,
+/// with and without noise (1 % of the change, 1 000 samples before the step).
+#[test]
+fn identify_step_is_right_on_logs_of_millions_of_samples() {
+    let (k, t, l) = (2.0, 60.0, 5.0);
+    for n in [700_000usize, 3_000_000] {
+        let h = 1_000.0 / n as f64 * 1.2;
+        for (pre, relative_noise) in [(0usize, 0.0), (1_000, 0.01)] {
+            let noise = relative_noise * k;
+            let f = fopdt_response(t, l);
+            let y64 = log_of::<f64>(&f, pre, n, h, 10.0, k, noise, 7);
+            let m = identify(&y64, pre, h, 1.0).unwrap();
+            assert!(
+                within_tolerance(&m, k, t, l, h, relative_noise),
+                "f64 {n}: {m:?}"
+            );
+            let y32 = log_of::<f32>(&f, pre, n, h, 10.0, k, noise, 7);
+            let m = identify(&y32, pre, h, 1.0).unwrap();
+            assert!(
+                within_tolerance(&m, k, t, l, h, relative_noise),
+                "f32 {n}: {m:?}"
+            );
+        }
+    }
+}
