@@ -61,8 +61,14 @@ fn automatic_tuning_on_the_benchmark_processes() {
                 );
             }
             Err(e) => {
-                assert!(f.process.starts_with("1/(s("), "{}: {e}", f.process);
-                assert!(e.contains("does not settle"));
+                // The integrating process never settles; the inverse response first goes the
+                // wrong way (2.7 % of the change), which an FOPDT model cannot represent.
+                if f.process.starts_with("1/(s(") {
+                    assert!(e.contains("does not settle"), "{}: {e}", f.process);
+                } else {
+                    assert!(f.process.starts_with("(1-"), "{}: {e}", f.process);
+                    assert!(e.contains("inverse response"), "{}: {e}", f.process);
+                }
             }
         }
         for r in &f.rows {

@@ -243,7 +243,7 @@ impl<F: Real> ThreePoint<F> {
         let error = target - self.position;
         let wanted = error.abs() * gt;
         let seconds = wanted.min(self.config.h).max(self.config.min_pulse);
-        if !(seconds > F::zero()) {
+        if seconds <= F::zero() {
             return Drive::Stop; // an error too small to be a time (underflow)
         }
         self.position = if wanted <= seconds {

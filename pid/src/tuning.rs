@@ -305,7 +305,7 @@ pub enum IdentifyError<F = f64> {
     NotFopdt,
 }
 
-impl<F: fmt::Display> fmt::Display for IdentifyError<F> {
+impl<F: Real> fmt::Display for IdentifyError<F> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::TooFewSamples(n) => {
@@ -322,17 +322,20 @@ impl<F: fmt::Display> fmt::Display for IdentifyError<F> {
             Self::NotSettled(moving) => {
                 write!(
                     f,
-                    "the response has not settled (its last tenth still moves by {moving} of the change): log longer"
+                    "the response has not settled (its last tenth still moves by {:.1} % of the change): log longer",
+                    percent(*moving)
                 )
             }
             Self::NoResponse => f.write_str("the process did not respond to the step"),
             Self::Overshoot(by) => write!(
                 f,
-                "the response overshoots its final value by {by} of the change: not a first-order-plus-dead-time process"
+                "the response overshoots its final value by {:.1} % of the change: not a first-order-plus-dead-time process",
+                percent(*by)
             ),
             Self::Undershoot(by) => write!(
                 f,
-                "the response first moves the wrong way by {by} of the change (inverse response): not a first-order-plus-dead-time process"
+                "the response first moves the wrong way by {:.1} % of the change (inverse response): not a first-order-plus-dead-time process",
+                percent(*by)
             ),
             Self::NotFopdt => {
                 f.write_str("the response does not fit a first-order-plus-dead-time model")
@@ -341,7 +344,12 @@ impl<F: fmt::Display> fmt::Display for IdentifyError<F> {
     }
 }
 
-impl<F: fmt::Debug + fmt::Display> core::error::Error for IdentifyError<F> {}
+impl<F: Real> core::error::Error for IdentifyError<F> {}
+
+/// A fraction as a percentage, for messages.
+fn percent<F: Real>(fraction: F) -> F {
+    fraction * F::from_u16(100)
+}
 
 /// Compensated (Neumaier) summation: the error stays a few ulps of the sum, independent of the
 /// number of terms (a plain f32 sum of 10⁶ samples loses about 3 decimal digits).
@@ -474,7 +482,7 @@ pub fn identify_step_at<F: Real>(
     };
     let change = y_final - y0;
     let two = F::from_u16(2);
-    if !(change.abs() > two * noise) || !change.is_finite() {
+    if !change.is_finite() || change.abs() <= two * noise {
         return Err(IdentifyError::NoResponse);
     }
     // Settled: the tail's first and last thirds agree to 2 % of the change.

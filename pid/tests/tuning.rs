@@ -6,6 +6,8 @@
     clippy::indexing_slicing,
     clippy::arithmetic_side_effects,
     clippy::cast_possible_truncation,
+    clippy::panic,
+    clippy::too_many_arguments,
     reason = "a test may panic: that is how it fails"
 )]
 
