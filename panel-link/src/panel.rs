@@ -48,6 +48,9 @@ pub const CENTRAL_DESK: usize = 46;
 /// Keys a panel holds while the host has not taken them.
 pub const KEY_QUEUE: usize = 8;
 
+/// A staged register whose byte arrived damaged: it keeps its old value.
+const KEEP: u8 = 0xFF;
+
 /// Why a register could not be set.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -141,7 +144,8 @@ pub enum HostEvent {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct HostStats {
-    /// Complete sequences sent.
+    /// Complete sequences sent: counted when the reset byte that closes one goes out (the panel
+    /// shows a sequence when that reset byte arrives).
     pub sequences: u64,
     /// Keys delivered.
     pub keys: u64,
@@ -154,7 +158,7 @@ pub struct HostStats {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 enum HostState {
-    /// Sending; `next` = 0 is the reset byte, k the register k − 1.
+    /// Sending; `next` = 0 is the reset byte, k the register k − 1 (the snapshot is taken at 1).
     Sending { next: usize },
     /// SÄN up, listening.
     AwaitKey { polls: u16, last: Option<u8> },
@@ -184,7 +188,13 @@ pub struct Host<const R: usize> {
     /// The registers as they were when the current sequence began.
     sending: [u8; R],
     state: HostState,
+    /// MOT as the last poll saw it (false while a stuck MOT is ignored).
+    mot: bool,
     ignore_mot: bool,
+    /// The reset byte closing a sequence has just gone out: a waiting key may be taken now.
+    between: bool,
+    /// The registers of a sequence have gone out: the next reset byte completes it.
+    open: bool,
     stats: HostStats,
 }
 
@@ -206,7 +216,10 @@ impl<const R: usize> Host<R> {
             registers: [0; R],
             sending: [0; R],
             state: HostState::Sending { next: 0 },
+            mot: false,
             ignore_mot: false,
+            between: false,
+            open: false,
             stats: HostStats {
                 sequences: 0,
                 keys: 0,
@@ -250,23 +263,43 @@ impl<const R: usize> Host<R> {
         &self.stats
     }
 
-    /// The transmitter is ready: the next byte of the sequence, or `None` while the host is not
+    /// The transmitter is ready: the next byte of the stream, or `None` while the host is not
     /// sending (SÄN up, or waiting for MOT to drop).
+    ///
+    /// Right after a reset byte, if the last MOT poll saw MOT high, the host raises SÄN here
+    /// (and returns `None`) instead of starting the next sequence; it never does so inside a
+    /// sequence, and after a key exchange it sends a whole sequence before it looks at MOT again.
     pub fn next_byte(&mut self) -> Option<u8> {
         let HostState::Sending { next } = self.state else {
             return None;
         };
-        let byte = if next == 0 {
+        if next == 0 {
+            // The reset byte: it closes the sequence before it (the panel shows it now) and
+            // opens the next.
+            if core::mem::replace(&mut self.open, false) {
+                self.stats.sequences = self.stats.sequences.saturating_add(1);
+            }
+            self.between = true;
+            self.state = HostState::Sending { next: 1 };
+            return Some(RESET);
+        }
+        if next == 1 {
+            if core::mem::replace(&mut self.between, false) && self.mot {
+                self.state = HostState::AwaitKey {
+                    polls: 0,
+                    last: None,
+                };
+                return None;
+            }
             self.sending = self.registers;
-            RESET
-        } else {
-            self.sending
-                .get(next.saturating_sub(1))
-                .copied()
-                .unwrap_or(RESET)
-        };
+        }
+        let byte = self
+            .sending
+            .get(next.saturating_sub(1))
+            .copied()
+            .unwrap_or(RESET);
         let next = if next >= R {
-            self.stats.sequences = self.stats.sequences.saturating_add(1);
+            self.open = true;
             0
         } else {
             next.saturating_add(1)
@@ -280,16 +313,9 @@ impl<const R: usize> Host<R> {
         if !mot {
             self.ignore_mot = false;
         }
+        self.mot = mot && !self.ignore_mot;
         match self.state {
-            HostState::Sending { .. } => {
-                if mot && !self.ignore_mot {
-                    self.state = HostState::AwaitKey {
-                        polls: 0,
-                        last: None,
-                    };
-                }
-                None
-            }
+            HostState::Sending { .. } => None, // MOT is looked at between sequences only
             HostState::AwaitKey { polls, last } => {
                 let polls = polls.saturating_add(1);
                 if polls >= self.config.key_timeout_polls {
@@ -301,14 +327,17 @@ impl<const R: usize> Host<R> {
                 None
             }
             HostState::AwaitMotLow { polls } => {
+                // Back to the registers where they stopped: right after a reset byte, so the
+                // next sequence goes out whole before MOT is looked at again.
                 if !mot {
-                    self.state = HostState::Sending { next: 0 };
+                    self.state = HostState::Sending { next: 1 };
                     return None;
                 }
                 let polls = polls.saturating_add(1);
                 if polls >= self.config.mot_stuck_polls {
                     self.ignore_mot = true;
-                    self.state = HostState::Sending { next: 0 };
+                    self.mot = false;
+                    self.state = HostState::Sending { next: 1 };
                     return Some(HostEvent::MotStuck);
                 }
                 self.state = HostState::AwaitMotLow { polls };
@@ -373,11 +402,14 @@ impl core::error::Error for PanelError {}
 pub struct PanelStats {
     /// Reset bytes received.
     pub resets: u64,
-    /// Register bytes latched.
-    pub latched: u64,
+    /// Sequences shown: a reset byte arrived after exactly `R` bytes since the reset before.
+    pub shown: u64,
+    /// Sequences not shown: a reset byte arrived after 1 to `R − 1` bytes, or after more than
+    /// `R`, since the reset before (a byte became a reset byte, or a reset byte was damaged).
+    pub discarded: u64,
     /// Bytes with a framing or parity error, or with bit 8 set but not the reset byte.
     pub bad_bytes: u64,
-    /// Register bytes beyond the last register, or before the first reset (ignored).
+    /// Bytes beyond the last register, or before the first reset (ignored).
     pub overruns: u64,
     /// Keys taken by the host.
     pub keys_sent: u64,
@@ -400,7 +432,9 @@ pub struct PanelStats {
 #[derive(Clone, Debug)]
 pub struct Panel<const R: usize> {
     registers: [u8; R],
-    /// The register the next byte goes to; `None` until the first reset byte.
+    /// The sequence being received: per register its 7-bit value, or [`KEEP`] for a damaged byte.
+    staged: [u8; R],
+    /// Bytes received since the last reset byte; `None` until the first reset byte.
     counter: Option<usize>,
     keys: Deque<u8, KEY_QUEUE>,
     san: bool,
@@ -422,13 +456,15 @@ impl<const R: usize> Panel<R> {
         const { assert!(R > 0, "a panel has at least one register") };
         Self {
             registers: [0; R],
+            staged: [KEEP; R],
             counter: None,
             keys: Deque::new(),
             san: false,
             mot_low_ticks: 0,
             stats: PanelStats {
                 resets: 0,
-                latched: 0,
+                shown: 0,
+                discarded: 0,
                 bad_bytes: 0,
                 overruns: 0,
                 keys_sent: 0,
@@ -449,10 +485,27 @@ impl<const R: usize> Panel<R> {
     }
 
     /// A byte (or line error) from the host.
+    ///
+    /// Bytes after a reset byte are staged; the next reset byte shows them, and only if exactly
+    /// `R` bytes came in between (a damaged one keeps its register's old value). Otherwise the
+    /// staged bytes are dropped and the display keeps what it showed.
     pub fn receive(&mut self, byte: Result<u8, LineError>) {
         if byte == Ok(RESET) {
-            self.counter = Some(0);
             self.stats.resets = self.stats.resets.saturating_add(1);
+            match self.counter {
+                Some(n) if n == R => {
+                    for (shown, &staged) in self.registers.iter_mut().zip(&self.staged) {
+                        if staged <= MAX_VALUE {
+                            *shown = staged;
+                        }
+                    }
+                    self.stats.shown = self.stats.shown.saturating_add(1);
+                }
+                // A reset byte right after a reset byte drops nothing.
+                Some(0) | None => {}
+                Some(_) => self.stats.discarded = self.stats.discarded.saturating_add(1),
+            }
+            self.counter = Some(0);
             return;
         }
         let Some(at) = self.counter else {
@@ -463,16 +516,13 @@ impl<const R: usize> Panel<R> {
         let value = match byte {
             Ok(value) if value <= MAX_VALUE => value,
             _ => {
-                // Damaged: keep the old value; the position still counts.
+                // Damaged: the register keeps its old value; the position still counts.
                 self.stats.bad_bytes = self.stats.bad_bytes.saturating_add(1);
-                return;
+                KEEP
             }
         };
-        match self.registers.get_mut(at) {
-            Some(slot) => {
-                *slot = value;
-                self.stats.latched = self.stats.latched.saturating_add(1);
-            }
+        match self.staged.get_mut(at) {
+            Some(slot) => *slot = value,
             None => self.stats.overruns = self.stats.overruns.saturating_add(1),
         }
     }
@@ -590,24 +640,55 @@ mod tests {
         let mut panel: Panel<3> = Panel::new();
         panel.receive(Ok(5)); // before any reset: ignored
         assert_eq!(panel.registers(), &[0, 0, 0]);
-        for b in [Ok(RESET), Ok(1), Err(LineError::Parity), Ok(3), Ok(9)] {
+        for b in [Ok(RESET), Ok(1), Ok(2), Ok(3)] {
             panel.receive(b);
         }
-        assert_eq!(panel.registers(), &[1, 0, 3]);
+        assert_eq!(panel.registers(), &[0, 0, 0]); // staged until the reset byte after it
+        for b in [Ok(RESET), Ok(4), Err(LineError::Parity), Ok(6), Ok(RESET)] {
+            panel.receive(b);
+        }
+        assert_eq!(panel.registers(), &[4, 2, 6]);
         assert_eq!(panel.stats().bad_bytes, 1);
-        assert_eq!(panel.stats().overruns, 2);
+        assert_eq!(panel.stats().shown, 2);
+        assert_eq!(panel.stats().overruns, 1);
     }
 
     #[test]
-    fn handshake_delivers_one_key_and_restarts_with_a_reset() {
+    fn a_sequence_of_the_wrong_length_is_not_shown() {
+        let mut panel: Panel<3> = Panel::new();
+        for b in [RESET, 1, 2, 3, RESET] {
+            panel.receive(Ok(b));
+        }
+        // Too short (a byte became a reset byte), too long (a reset byte was damaged): dropped.
+        for b in [4, RESET, 5, 6, RESET, 7, 8, 9, 0x7F, 10, 11, 12] {
+            panel.receive(Ok(b));
+        }
+        panel.receive(Ok(RESET));
+        assert_eq!(panel.registers(), &[1, 2, 3]);
+        assert_eq!(panel.stats().discarded, 3);
+        assert_eq!(panel.stats().overruns, 4);
+        // A reset right after a reset drops nothing.
+        panel.receive(Ok(RESET));
+        assert_eq!(panel.stats().discarded, 3);
+    }
+
+    #[test]
+    fn handshake_delivers_one_key_between_sequences() {
         let mut host: Host<7> = Host::new(HostConfig::default()).unwrap();
         let mut panel: Panel<7> = Panel::new();
-        host.next_byte();
-        host.next_byte();
+        assert_eq!(host.next_byte(), Some(RESET));
+        assert_eq!(host.next_byte(), Some(0));
         panel.press(0x33).unwrap();
         assert_eq!(host.poll_mot(panel.mot()), None);
-        assert!(host.san());
+        // MOT is seen, but the sequence goes out whole first, with the reset byte closing it.
+        for _ in 1..7 {
+            assert!(!host.san());
+            assert_eq!(host.next_byte(), Some(0));
+        }
+        assert_eq!(host.next_byte(), Some(RESET));
+        assert_eq!(host.stats().sequences, 1);
         assert_eq!(host.next_byte(), None);
+        assert!(host.san());
         let first = panel.set_san(host.san()).unwrap();
         assert_eq!(host.receive(Ok(first)), None);
         let again = panel.tick_20ms().unwrap();
@@ -617,11 +698,13 @@ mod tests {
         assert_eq!(host.receive(Ok(third)), Some(HostEvent::Key(0x33)));
         assert!(!host.san());
         assert_eq!(panel.set_san(false), None);
-        // A late repeat is ignored; MOT low lets the host send again, from the reset byte.
+        // A late repeat is ignored; MOT low lets the host go on with the registers (the reset
+        // byte went out before the exchange).
         assert_eq!(host.receive(Ok(0x33)), None);
         assert!(!panel.mot());
+        assert_eq!(host.next_byte(), None);
         host.poll_mot(panel.mot());
-        assert_eq!(host.next_byte(), Some(RESET));
+        assert_eq!(host.next_byte(), Some(0));
         assert_eq!(host.stats().keys, 1);
     }
 
@@ -633,16 +716,23 @@ mod tests {
         })
         .unwrap();
         let mut events = Vec::new();
+        host.poll_mot(true);
+        assert_eq!(host.next_byte(), Some(RESET));
+        assert_eq!(host.next_byte(), None);
         for _ in 0..20 {
             events.extend(host.poll_mot(true));
         }
         assert_eq!(events, vec![HostEvent::KeyTimedOut, HostEvent::MotStuck]);
-        assert_eq!(host.next_byte(), Some(RESET));
-        // Still ignoring the stuck MOT until it drops once.
-        assert_eq!(host.poll_mot(true), None);
+        // Still ignoring the stuck MOT until it drops once: whole sequences go out.
+        for _ in 0..3 {
+            assert_eq!(host.poll_mot(true), None);
+            assert!((0..8).all(|_| host.next_byte().is_some()));
+        }
         assert!(!host.san());
+        // MOT dropped once: the next boundary between sequences (here, now) takes the key.
         host.poll_mot(false);
         host.poll_mot(true);
+        assert_eq!(host.next_byte(), None);
         assert!(host.san());
     }
 
