@@ -2,19 +2,52 @@
 //! with an endless byte sequence and takes key presses over a MOT/SÄN handshake.
 //!
 //! # On the wire
-//! A sequence is the **reset byte** [`RESET`] (`0xFF`) followed by one byte per register, in
-//! register order; the panel's counter, zeroed by the reset byte, says which register a byte goes
-//! to. **Register bytes carry 7 bits** (0–127, bit 8 always 0), so no register value can be taken
-//! for the reset byte, which is the only byte with bit 8 set; [`Host::set`] refuses a value above
+//! The host sends, forever, the **reset byte** [`RESET`] (`0xFF`) and one byte per register, in
+//! register order: `RESET r1 … rR RESET r1 … rR RESET …`. **Register bytes carry 7 bits** (0–127,
+//! bit 8 always 0), so no register value is the reset byte; [`Host::set`] refuses a value above
 //! 127 ([`RegisterError::Value`]). On the line each byte is framed with a start bit, 8 data bits,
-//! a parity bit and a stop bit ([`crate::line::Framing::PANEL`]); a byte that arrives with a
-//! framing or parity error still moves the counter on, so the registers after it land in their
-//! own places and only the damaged one keeps its old value until the next sequence.
+//! an even parity bit and a stop bit ([`crate::line::Framing::PANEL`]).
+//!
+//! The panel's counter, zeroed by a reset byte, says which register a byte is for; the panel
+//! **stages** the bytes and shows them only when the next reset byte arrives after **exactly
+//! `R` bytes** (beyond the source, which latched each byte at once). A byte that arrives with a
+//! framing or parity error, or with bit 8 set, still moves the counter on: its register keeps
+//! the value it showed. A reset byte after fewer or more bytes drops what was staged
+//! ([`PanelStats::discarded`]); the display keeps what it showed.
+//!
+//! # What the panel shows after a bit error
+//! The parity bit catches every odd number of flipped bits in a frame, and a flipped start or
+//! stop bit is a framing error; two flips among the data and parity bits pass. So a 2-bit error
+//! can turn a register value into the reset byte (`0x7E` → `0xFF`: every value with six or seven
+//! ones), the reset byte into a register value, or one register value into another. Then:
+//! - After **any 1- or 2-bit error anywhere in the stream** (in one frame, or one bit in each of
+//!   two), **no register ever shows a value the host did not send for that register** (in this
+//!   or an earlier sequence; before the first sequence, 0): never a shifted display. The one exception the link cannot see: a register whose own byte took two
+//!   flips that still pass the parity shows that wrong 7-bit value until the next clean sequence
+//!   (the source has no checksum to catch it).
+//! - **Every register shows the host's value once the next clean sequence is through** (the one
+//!   that begins with the first reset byte after the damage, up to and including the reset byte
+//!   that closes it). A damaged reset byte or a register byte read as a reset byte costs at most
+//!   the sequences on both sides of it: the display is one or two sequences older, never wrong.
+//!
+//! These hold for a receiver that stays in character sync (every frame read as a frame, e.g.
+//! the host's bytes are clean at the start and stop bits) — tested for every value 0–127 at
+//! every position of 7, 29 and 46 registers and every 1- and 2-bit change of its frame and of
+//! the reset bytes on both sides — and, for the first sentence, also when a flipped start bit
+//! makes a bit receiver ([`crate::line::BitReceiver`]) lose character sync on back-to-back
+//! frames (tested for every bit pair over a whole sequence and its reset bytes, eight sets of
+//! values). **Limit:** out of sync, a receiver can read every frame as a framing error for as
+//! long as the data repeats (all registers even, e.g. `0x7E` or 0, after a start bit was hit
+//! in a run of `0x7F`s): the display is then not refreshed — stale, never wrong —
+//! until an idle gap in the stream (a key exchange, or the host stopping) lets it find the start
+//! bits again. The host never leaves such a gap by itself.
 //!
 //! # The key handshake
 //! - The panel has a key: it raises **MOT**.
-//! - The host looks at MOT every **10 ms** ([`Host::poll_mot`]); seeing it, it stops the
-//!   sequence, raises **SÄN** and listens.
+//! - The host looks at MOT every **10 ms** ([`Host::poll_mot`]) and answers it **between
+//!   sequences only**: right after the reset byte that closes a sequence ([`Host::next_byte`]
+//!   then returns `None`), it raises **SÄN** and listens. (The source stopped the sequence at
+//!   once; a MOT line that chatters could then stop every sequence before its end.)
 //! - While SÄN is up the panel sends the key byte at once and again every **20 ms**
 //!   ([`Panel::tick_20ms`]).
 //! - Two **consecutive identical** clean bytes are the key ([`HostEvent::Key`]); the host drops
@@ -22,12 +55,19 @@
 //!   damaged byte and, because the host ignores the line until MOT has dropped, never delivered
 //!   twice.
 //! - SÄN dropped: the panel drops MOT (for two of its 20 ms ticks, so the host sees it) and
-//!   forgets the key; the host waits for MOT low and restarts with a fresh sequence.
+//!   forgets the key; the host waits for MOT low and goes on with the registers (the reset byte
+//!   went out before the exchange), and sends a whole sequence before it answers MOT again.
+//!
+//! A key waits at most one sequence (`R + 1` byte times) plus a poll before SÄN rises.
 //!
 //! Beyond the source: the host gives up on a key after [`HostConfig::key_timeout_polls`] polls
 //! ([`HostEvent::KeyTimedOut`]) and on a MOT line that never drops after
 //! [`HostConfig::mot_stuck_polls`] ([`HostEvent::MotStuck`]: it goes back to refreshing and
-//! ignores MOT until it has seen it low), so a dead panel cannot stop the displays.
+//! ignores MOT until it has seen it low). So **whatever the MOT line does** (stuck high, stuck
+//! low, toggling at every poll, glitching), when the transmitter is given a byte whenever it is
+//! ready and MOT is polled every 10 ms, **the panel shows a new sequence at least every `R + 1`
+//! byte times plus `key_timeout_polls + mot_stuck_polls` polls** (with the defaults and 29
+//! registers: 69 ms + 1.1 s; 69 ms while nobody presses a key).
 
 use core::fmt;
 
@@ -114,6 +154,9 @@ pub struct HostConfig {
     /// 100 ms: five repeats of the key).
     pub key_timeout_polls: u16,
     /// Polls waiting for MOT to drop before the host refreshes again regardless (default 100).
+    ///
+    /// `key_timeout_polls + mot_stuck_polls` polls is the longest a key exchange lasts, so the
+    /// panel shows a new sequence at least every `R + 1` byte times plus that many polls.
     pub mot_stuck_polls: u16,
 }
 
