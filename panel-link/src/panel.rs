@@ -218,9 +218,11 @@ enum HostState {
 /// let mut panel: Panel<7> = Panel::new();
 /// host.set(2, 99)?;
 /// for _ in 0..8 {
-///     let byte = host.next_byte().unwrap_or(RESET);
+///     let byte = host.next_byte().unwrap_or(RESET); // the reset byte, then 7 registers
 ///     panel.receive(Ok(byte));
 /// }
+/// assert_eq!(panel.registers()[2], 0); // staged: shown when the next reset byte arrives
+/// panel.receive(Ok(host.next_byte().unwrap_or(RESET)));
 /// assert_eq!(panel.registers()[2], 99);
 /// # Ok::<(), Box<dyn core::error::Error>>(())
 /// ```
