@@ -586,7 +586,10 @@ fn refresh_bound<const R: usize>(config: HostConfig) -> u64 {
 fn issue_example_a_chattering_mot_does_not_freeze_the_displays() {
     let config = HostConfig::default();
     for (name, pattern) in [
-        ("toggling", &(|p: u64| p % 2 == 0) as &dyn Fn(u64) -> bool),
+        (
+            "toggling",
+            &(|p: u64| p.is_multiple_of(2)) as &dyn Fn(u64) -> bool,
+        ),
         ("one poll in twelve low", &|p: u64| p % 12 != 11),
     ] {
         let (gap, changes) = longest_refresh_gap::<29>(config, pattern, 100_000_000);
@@ -690,14 +693,19 @@ fn every_bit_pair_on_the_line<const R: usize>(a: &[u8; R], b: &[u8; R]) -> (u64,
                     continue;
                 };
                 // The frame ending here, if the receiver is in sync.
-                let aligned = (k + 1 - 3) % 11 == 0;
+                let aligned = (k + 1 - 3).is_multiple_of(11);
                 let index = ((k + 1 - 3) / 11).saturating_sub(1);
                 let hit = (k + 1 - 11..=k).contains(&i) || (k + 1 - 11..=k).contains(&j);
                 if let Ok(w) = got {
-                    if hit && aligned && w <= MAX_VALUE && index % seq > 0 {
+                    if hit && aligned && w <= MAX_VALUE && !index.is_multiple_of(seq) {
                         allow[index % seq - 1] |= 1 << w; // cannot be told from a good byte
                     }
-                    if w == RESET && aligned && index % seq == 0 && k > j && right_by.is_none() {
+                    if w == RESET
+                        && aligned
+                        && index.is_multiple_of(seq)
+                        && k > j
+                        && right_by.is_none()
+                    {
                         right_by = Some(k + 11 * seq);
                     }
                 }
