@@ -761,3 +761,25 @@ fn every_1_and_2_bit_error_on_the_line() {
     }
     assert!(cases > 8 * 4_000);
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// A key pressed at any moment raises SÄN within one sequence (`R + 1` byte times; the
+    /// simulation's 100 µs steps add up to one step per byte) plus one MOT poll.
+    #[test]
+    fn a_key_waits_at_most_one_sequence_and_a_poll(after_us in 0u64..200_000) {
+        let mut sim: Sim<29> = Sim::new(Damage::None, 0);
+        sim.run_ms(after_us / 1000);
+        for _ in 0..(after_us % 1000) / STEP_US {
+            sim.step();
+        }
+        sim.panel.press(0x41).unwrap();
+        let pressed = sim.now;
+        while !sim.host.san() {
+            sim.step();
+        }
+        let bound = 30 * (BYTE_US + STEP_US) + 10_000;
+        prop_assert!(sim.now - pressed <= bound, "{} µs", sim.now - pressed);
+    }
+}
