@@ -953,10 +953,12 @@ pub mod ports {
                 Err(IoError::Port(_)) => {}
                 Err(e) => return Err(format!("host port: {e}")),
             }
-            // After the last update: two more full sequences, then compare.
+            // After the last update: three more full sequences, then compare (the first may
+            // hold older values; the panel shows the second when its closing reset byte arrives,
+            // and the third leaves that byte time to get there).
             if now >= keys_done_by && !host.san() {
                 let base = *settle_from.get_or_insert(host.stats().sequences);
-                if host.stats().sequences >= base + 2 {
+                if host.stats().sequences >= base + 3 {
                     break;
                 }
             }

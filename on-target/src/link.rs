@@ -181,7 +181,8 @@ pub fn panel_sequence_and_key() -> Outcome {
         host.set(usize::from(i), i + 10).map_err(|_| "set")?;
     }
     let framing = Framing::PANEL;
-    // One sequence with byte 5 damaged on the line, then a clean one.
+    // One sequence with byte 5 damaged on the line, then a clean one; a sequence is shown when
+    // the reset byte after it arrives.
     for k in 0..60u32 {
         let byte = host.next_byte().ok_or("host stopped")?;
         let mut frame = framing.encode(byte);
@@ -189,15 +190,20 @@ pub fn panel_sequence_and_key() -> Outcome {
             frame ^= 1 << 4;
         }
         panel.receive(framing.decode(frame));
-        if k == 29 {
+        if k == 30 {
             check!(panel.registers()[4] == 0); // damaged in the first sequence: kept its old value
+            check!(panel.registers()[5] == 15);
         }
     }
+    check!(panel.registers()[4] == 0); // the second sequence is shown when its reset arrives
+    panel.receive(framing.decode(framing.encode(host.next_byte().ok_or("host stopped")?)));
     check!(panel.registers() == host.registers());
     check!(framing.decode(framing.encode(RESET) ^ 1) == Err(LineError::Framing));
-    // Key: MOT, SÄN, two equal bytes.
+    // Key: MOT, taken between sequences (right after a reset byte), SÄN, two equal bytes.
     panel.press(0x2A).map_err(|_| "press")?;
     check!(host.poll_mot(panel.mot()).is_none());
+    check!(host.next_byte().is_none()); // right after a reset byte: the key's turn
+    check!(host.san());
     let first = panel.set_san(host.san()).ok_or("no key sent")?;
     check!(host.receive(Ok(first)).is_none());
     let again = panel.tick_20ms().ok_or("no repeat")?;
@@ -205,6 +211,6 @@ pub fn panel_sequence_and_key() -> Outcome {
     check!(panel.set_san(host.san()).is_none());
     check!(!panel.mot());
     check!(host.poll_mot(panel.mot()).is_none());
-    check!(host.next_byte() == Some(RESET));
+    check!(host.next_byte() == Some(10)); // the registers go on: the reset went before
     Ok(())
 }

@@ -2,19 +2,52 @@
 //! with an endless byte sequence and takes key presses over a MOT/SÄN handshake.
 //!
 //! # On the wire
-//! A sequence is the **reset byte** [`RESET`] (`0xFF`) followed by one byte per register, in
-//! register order; the panel's counter, zeroed by the reset byte, says which register a byte goes
-//! to. **Register bytes carry 7 bits** (0–127, bit 8 always 0), so no register value can be taken
-//! for the reset byte, which is the only byte with bit 8 set; [`Host::set`] refuses a value above
+//! The host sends, forever, the **reset byte** [`RESET`] (`0xFF`) and one byte per register, in
+//! register order: `RESET r1 … rR RESET r1 … rR RESET …`. **Register bytes carry 7 bits** (0–127,
+//! bit 8 always 0), so no register value is the reset byte; [`Host::set`] refuses a value above
 //! 127 ([`RegisterError::Value`]). On the line each byte is framed with a start bit, 8 data bits,
-//! a parity bit and a stop bit ([`crate::line::Framing::PANEL`]); a byte that arrives with a
-//! framing or parity error still moves the counter on, so the registers after it land in their
-//! own places and only the damaged one keeps its old value until the next sequence.
+//! an even parity bit and a stop bit ([`crate::line::Framing::PANEL`]).
+//!
+//! The panel's counter, zeroed by a reset byte, says which register a byte is for; the panel
+//! **stages** the bytes and shows them only when the next reset byte arrives after **exactly
+//! `R` bytes** (beyond the source, which latched each byte at once). A byte that arrives with a
+//! framing or parity error, or with bit 8 set, still moves the counter on: its register keeps
+//! the value it showed. A reset byte after fewer or more bytes drops what was staged
+//! ([`PanelStats::discarded`]); the display keeps what it showed.
+//!
+//! # What the panel shows after a bit error
+//! The parity bit catches every odd number of flipped bits in a frame, and a flipped start or
+//! stop bit is a framing error; two flips among the data and parity bits pass. So a 2-bit error
+//! can turn a register value into the reset byte (`0x7E` → `0xFF`: every value with six or seven
+//! ones), the reset byte into a register value, or one register value into another. Then:
+//! - After **any 1- or 2-bit error anywhere in the stream** (in one frame, or one bit in each of
+//!   two), **no register ever shows a value the host did not send for that register** (in this
+//!   or an earlier sequence; before the first sequence, 0): never a shifted display. The one exception the link cannot see: a register whose own byte took two
+//!   flips that still pass the parity shows that wrong 7-bit value until the next clean sequence
+//!   (the source has no checksum to catch it).
+//! - **Every register shows the host's value once the next clean sequence is through** (the one
+//!   that begins with the first reset byte after the damage, up to and including the reset byte
+//!   that closes it). A damaged reset byte or a register byte read as a reset byte costs at most
+//!   the sequences on both sides of it: the display is one or two sequences older, never wrong.
+//!
+//! These hold for a receiver that stays in character sync (every frame read as a frame, e.g.
+//! the host's bytes are clean at the start and stop bits) — tested for every value 0–127 at
+//! every position of 7, 29 and 46 registers and every 1- and 2-bit change of its frame and of
+//! the reset bytes on both sides — and, for the first sentence, also when a flipped start bit
+//! makes a bit receiver ([`crate::line::BitReceiver`]) lose character sync on back-to-back
+//! frames (tested for every bit pair over a whole sequence and its reset bytes, eight sets of
+//! values). **Limit:** out of sync, a receiver can read every frame as a framing error for as
+//! long as the data repeats (all registers even, e.g. `0x7E` or 0, after a start bit was hit
+//! in a run of `0x7F`s): the display is then not refreshed — stale, never wrong —
+//! until an idle gap in the stream (a key exchange, or the host stopping) lets it find the start
+//! bits again. The host never leaves such a gap by itself.
 //!
 //! # The key handshake
 //! - The panel has a key: it raises **MOT**.
-//! - The host looks at MOT every **10 ms** ([`Host::poll_mot`]); seeing it, it stops the
-//!   sequence, raises **SÄN** and listens.
+//! - The host looks at MOT every **10 ms** ([`Host::poll_mot`]) and answers it **between
+//!   sequences only**: right after the reset byte that closes a sequence ([`Host::next_byte`]
+//!   then returns `None`), it raises **SÄN** and listens. (The source stopped the sequence at
+//!   once; a MOT line that chatters could then stop every sequence before its end.)
 //! - While SÄN is up the panel sends the key byte at once and again every **20 ms**
 //!   ([`Panel::tick_20ms`]).
 //! - Two **consecutive identical** clean bytes are the key ([`HostEvent::Key`]); the host drops
@@ -22,12 +55,19 @@
 //!   damaged byte and, because the host ignores the line until MOT has dropped, never delivered
 //!   twice.
 //! - SÄN dropped: the panel drops MOT (for two of its 20 ms ticks, so the host sees it) and
-//!   forgets the key; the host waits for MOT low and restarts with a fresh sequence.
+//!   forgets the key; the host waits for MOT low and goes on with the registers (the reset byte
+//!   went out before the exchange), and sends a whole sequence before it answers MOT again.
+//!
+//! A key waits at most one sequence (`R + 1` byte times) plus a poll before SÄN rises.
 //!
 //! Beyond the source: the host gives up on a key after [`HostConfig::key_timeout_polls`] polls
 //! ([`HostEvent::KeyTimedOut`]) and on a MOT line that never drops after
 //! [`HostConfig::mot_stuck_polls`] ([`HostEvent::MotStuck`]: it goes back to refreshing and
-//! ignores MOT until it has seen it low), so a dead panel cannot stop the displays.
+//! ignores MOT until it has seen it low). So **whatever the MOT line does** (stuck high, stuck
+//! low, toggling at every poll, glitching), when the transmitter is given a byte whenever it is
+//! ready and MOT is polled every 10 ms, **the panel shows a new sequence at least every `R + 1`
+//! byte times plus `key_timeout_polls + mot_stuck_polls` polls** (with the defaults and 29
+//! registers: 69 ms + 1.1 s; 69 ms while nobody presses a key).
 
 use core::fmt;
 
@@ -47,6 +87,9 @@ pub const LANE_PANEL: usize = 29;
 pub const CENTRAL_DESK: usize = 46;
 /// Keys a panel holds while the host has not taken them.
 pub const KEY_QUEUE: usize = 8;
+
+/// A staged register whose byte arrived damaged: it keeps its old value.
+const KEEP: u8 = 0xFF;
 
 /// Why a register could not be set.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -111,6 +154,9 @@ pub struct HostConfig {
     /// 100 ms: five repeats of the key).
     pub key_timeout_polls: u16,
     /// Polls waiting for MOT to drop before the host refreshes again regardless (default 100).
+    ///
+    /// `key_timeout_polls + mot_stuck_polls` polls is the longest a key exchange lasts, so the
+    /// panel shows a new sequence at least every `R + 1` byte times plus that many polls.
     pub mot_stuck_polls: u16,
 }
 
@@ -141,7 +187,8 @@ pub enum HostEvent {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct HostStats {
-    /// Complete sequences sent.
+    /// Complete sequences sent: counted when the reset byte that closes one goes out (the panel
+    /// shows a sequence when that reset byte arrives).
     pub sequences: u64,
     /// Keys delivered.
     pub keys: u64,
@@ -154,7 +201,7 @@ pub struct HostStats {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 enum HostState {
-    /// Sending; `next` = 0 is the reset byte, k the register k − 1.
+    /// Sending; `next` = 0 is the reset byte, k the register k − 1 (the snapshot is taken at 1).
     Sending { next: usize },
     /// SÄN up, listening.
     AwaitKey { polls: u16, last: Option<u8> },
@@ -171,9 +218,11 @@ enum HostState {
 /// let mut panel: Panel<7> = Panel::new();
 /// host.set(2, 99)?;
 /// for _ in 0..8 {
-///     let byte = host.next_byte().unwrap_or(RESET);
+///     let byte = host.next_byte().unwrap_or(RESET); // the reset byte, then 7 registers
 ///     panel.receive(Ok(byte));
 /// }
+/// assert_eq!(panel.registers()[2], 0); // staged: shown when the next reset byte arrives
+/// panel.receive(Ok(host.next_byte().unwrap_or(RESET)));
 /// assert_eq!(panel.registers()[2], 99);
 /// # Ok::<(), Box<dyn core::error::Error>>(())
 /// ```
@@ -184,7 +233,13 @@ pub struct Host<const R: usize> {
     /// The registers as they were when the current sequence began.
     sending: [u8; R],
     state: HostState,
+    /// MOT as the last poll saw it (false while a stuck MOT is ignored).
+    mot: bool,
     ignore_mot: bool,
+    /// The reset byte closing a sequence has just gone out: a waiting key may be taken now.
+    between: bool,
+    /// The registers of a sequence have gone out: the next reset byte completes it.
+    open: bool,
     stats: HostStats,
 }
 
@@ -206,7 +261,10 @@ impl<const R: usize> Host<R> {
             registers: [0; R],
             sending: [0; R],
             state: HostState::Sending { next: 0 },
+            mot: false,
             ignore_mot: false,
+            between: false,
+            open: false,
             stats: HostStats {
                 sequences: 0,
                 keys: 0,
@@ -250,23 +308,43 @@ impl<const R: usize> Host<R> {
         &self.stats
     }
 
-    /// The transmitter is ready: the next byte of the sequence, or `None` while the host is not
+    /// The transmitter is ready: the next byte of the stream, or `None` while the host is not
     /// sending (SÄN up, or waiting for MOT to drop).
+    ///
+    /// Right after a reset byte, if the last MOT poll saw MOT high, the host raises SÄN here
+    /// (and returns `None`) instead of starting the next sequence; it never does so inside a
+    /// sequence, and after a key exchange it sends a whole sequence before it looks at MOT again.
     pub fn next_byte(&mut self) -> Option<u8> {
         let HostState::Sending { next } = self.state else {
             return None;
         };
-        let byte = if next == 0 {
+        if next == 0 {
+            // The reset byte: it closes the sequence before it (the panel shows it now) and
+            // opens the next.
+            if core::mem::replace(&mut self.open, false) {
+                self.stats.sequences = self.stats.sequences.saturating_add(1);
+            }
+            self.between = true;
+            self.state = HostState::Sending { next: 1 };
+            return Some(RESET);
+        }
+        if next == 1 {
+            if core::mem::replace(&mut self.between, false) && self.mot {
+                self.state = HostState::AwaitKey {
+                    polls: 0,
+                    last: None,
+                };
+                return None;
+            }
             self.sending = self.registers;
-            RESET
-        } else {
-            self.sending
-                .get(next.saturating_sub(1))
-                .copied()
-                .unwrap_or(RESET)
-        };
+        }
+        let byte = self
+            .sending
+            .get(next.saturating_sub(1))
+            .copied()
+            .unwrap_or(RESET);
         let next = if next >= R {
-            self.stats.sequences = self.stats.sequences.saturating_add(1);
+            self.open = true;
             0
         } else {
             next.saturating_add(1)
@@ -280,16 +358,9 @@ impl<const R: usize> Host<R> {
         if !mot {
             self.ignore_mot = false;
         }
+        self.mot = mot && !self.ignore_mot;
         match self.state {
-            HostState::Sending { .. } => {
-                if mot && !self.ignore_mot {
-                    self.state = HostState::AwaitKey {
-                        polls: 0,
-                        last: None,
-                    };
-                }
-                None
-            }
+            HostState::Sending { .. } => None, // MOT is looked at between sequences only
             HostState::AwaitKey { polls, last } => {
                 let polls = polls.saturating_add(1);
                 if polls >= self.config.key_timeout_polls {
@@ -301,14 +372,17 @@ impl<const R: usize> Host<R> {
                 None
             }
             HostState::AwaitMotLow { polls } => {
+                // Back to the registers where they stopped: right after a reset byte, so the
+                // next sequence goes out whole before MOT is looked at again.
                 if !mot {
-                    self.state = HostState::Sending { next: 0 };
+                    self.state = HostState::Sending { next: 1 };
                     return None;
                 }
                 let polls = polls.saturating_add(1);
                 if polls >= self.config.mot_stuck_polls {
                     self.ignore_mot = true;
-                    self.state = HostState::Sending { next: 0 };
+                    self.mot = false;
+                    self.state = HostState::Sending { next: 1 };
                     return Some(HostEvent::MotStuck);
                 }
                 self.state = HostState::AwaitMotLow { polls };
@@ -373,11 +447,14 @@ impl core::error::Error for PanelError {}
 pub struct PanelStats {
     /// Reset bytes received.
     pub resets: u64,
-    /// Register bytes latched.
-    pub latched: u64,
+    /// Sequences shown: a reset byte arrived after exactly `R` bytes since the reset before.
+    pub shown: u64,
+    /// Sequences not shown: a reset byte arrived after 1 to `R − 1` bytes, or after more than
+    /// `R`, since the reset before (a byte became a reset byte, or a reset byte was damaged).
+    pub discarded: u64,
     /// Bytes with a framing or parity error, or with bit 8 set but not the reset byte.
     pub bad_bytes: u64,
-    /// Register bytes beyond the last register, or before the first reset (ignored).
+    /// Bytes beyond the last register, or before the first reset (ignored).
     pub overruns: u64,
     /// Keys taken by the host.
     pub keys_sent: u64,
@@ -400,7 +477,9 @@ pub struct PanelStats {
 #[derive(Clone, Debug)]
 pub struct Panel<const R: usize> {
     registers: [u8; R],
-    /// The register the next byte goes to; `None` until the first reset byte.
+    /// The sequence being received: per register its 7-bit value, or [`KEEP`] for a damaged byte.
+    staged: [u8; R],
+    /// Bytes received since the last reset byte; `None` until the first reset byte.
     counter: Option<usize>,
     keys: Deque<u8, KEY_QUEUE>,
     san: bool,
@@ -422,13 +501,15 @@ impl<const R: usize> Panel<R> {
         const { assert!(R > 0, "a panel has at least one register") };
         Self {
             registers: [0; R],
+            staged: [KEEP; R],
             counter: None,
             keys: Deque::new(),
             san: false,
             mot_low_ticks: 0,
             stats: PanelStats {
                 resets: 0,
-                latched: 0,
+                shown: 0,
+                discarded: 0,
                 bad_bytes: 0,
                 overruns: 0,
                 keys_sent: 0,
@@ -449,10 +530,27 @@ impl<const R: usize> Panel<R> {
     }
 
     /// A byte (or line error) from the host.
+    ///
+    /// Bytes after a reset byte are staged; the next reset byte shows them, and only if exactly
+    /// `R` bytes came in between (a damaged one keeps its register's old value). Otherwise the
+    /// staged bytes are dropped and the display keeps what it showed.
     pub fn receive(&mut self, byte: Result<u8, LineError>) {
         if byte == Ok(RESET) {
-            self.counter = Some(0);
             self.stats.resets = self.stats.resets.saturating_add(1);
+            match self.counter {
+                Some(n) if n == R => {
+                    for (shown, &staged) in self.registers.iter_mut().zip(&self.staged) {
+                        if staged <= MAX_VALUE {
+                            *shown = staged;
+                        }
+                    }
+                    self.stats.shown = self.stats.shown.saturating_add(1);
+                }
+                // A reset byte right after a reset byte drops nothing.
+                Some(0) | None => {}
+                Some(_) => self.stats.discarded = self.stats.discarded.saturating_add(1),
+            }
+            self.counter = Some(0);
             return;
         }
         let Some(at) = self.counter else {
@@ -463,16 +561,13 @@ impl<const R: usize> Panel<R> {
         let value = match byte {
             Ok(value) if value <= MAX_VALUE => value,
             _ => {
-                // Damaged: keep the old value; the position still counts.
+                // Damaged: the register keeps its old value; the position still counts.
                 self.stats.bad_bytes = self.stats.bad_bytes.saturating_add(1);
-                return;
+                KEEP
             }
         };
-        match self.registers.get_mut(at) {
-            Some(slot) => {
-                *slot = value;
-                self.stats.latched = self.stats.latched.saturating_add(1);
-            }
+        match self.staged.get_mut(at) {
+            Some(slot) => *slot = value,
             None => self.stats.overruns = self.stats.overruns.saturating_add(1),
         }
     }
@@ -590,24 +685,55 @@ mod tests {
         let mut panel: Panel<3> = Panel::new();
         panel.receive(Ok(5)); // before any reset: ignored
         assert_eq!(panel.registers(), &[0, 0, 0]);
-        for b in [Ok(RESET), Ok(1), Err(LineError::Parity), Ok(3), Ok(9)] {
+        for b in [Ok(RESET), Ok(1), Ok(2), Ok(3)] {
             panel.receive(b);
         }
-        assert_eq!(panel.registers(), &[1, 0, 3]);
+        assert_eq!(panel.registers(), &[0, 0, 0]); // staged until the reset byte after it
+        for b in [Ok(RESET), Ok(4), Err(LineError::Parity), Ok(6), Ok(RESET)] {
+            panel.receive(b);
+        }
+        assert_eq!(panel.registers(), &[4, 2, 6]);
         assert_eq!(panel.stats().bad_bytes, 1);
-        assert_eq!(panel.stats().overruns, 2);
+        assert_eq!(panel.stats().shown, 2);
+        assert_eq!(panel.stats().overruns, 1);
     }
 
     #[test]
-    fn handshake_delivers_one_key_and_restarts_with_a_reset() {
+    fn a_sequence_of_the_wrong_length_is_not_shown() {
+        let mut panel: Panel<3> = Panel::new();
+        for b in [RESET, 1, 2, 3, RESET] {
+            panel.receive(Ok(b));
+        }
+        // Too short (a byte became a reset byte), too long (a reset byte was damaged): dropped.
+        for b in [4, RESET, 5, 6, RESET, 7, 8, 9, 0x7F, 10, 11, 12] {
+            panel.receive(Ok(b));
+        }
+        panel.receive(Ok(RESET));
+        assert_eq!(panel.registers(), &[1, 2, 3]);
+        assert_eq!(panel.stats().discarded, 3);
+        assert_eq!(panel.stats().overruns, 4);
+        // A reset right after a reset drops nothing.
+        panel.receive(Ok(RESET));
+        assert_eq!(panel.stats().discarded, 3);
+    }
+
+    #[test]
+    fn handshake_delivers_one_key_between_sequences() {
         let mut host: Host<7> = Host::new(HostConfig::default()).unwrap();
         let mut panel: Panel<7> = Panel::new();
-        host.next_byte();
-        host.next_byte();
+        assert_eq!(host.next_byte(), Some(RESET));
+        assert_eq!(host.next_byte(), Some(0));
         panel.press(0x33).unwrap();
         assert_eq!(host.poll_mot(panel.mot()), None);
-        assert!(host.san());
+        // MOT is seen, but the sequence goes out whole first, with the reset byte closing it.
+        for _ in 1..7 {
+            assert!(!host.san());
+            assert_eq!(host.next_byte(), Some(0));
+        }
+        assert_eq!(host.next_byte(), Some(RESET));
+        assert_eq!(host.stats().sequences, 1);
         assert_eq!(host.next_byte(), None);
+        assert!(host.san());
         let first = panel.set_san(host.san()).unwrap();
         assert_eq!(host.receive(Ok(first)), None);
         let again = panel.tick_20ms().unwrap();
@@ -617,11 +743,13 @@ mod tests {
         assert_eq!(host.receive(Ok(third)), Some(HostEvent::Key(0x33)));
         assert!(!host.san());
         assert_eq!(panel.set_san(false), None);
-        // A late repeat is ignored; MOT low lets the host send again, from the reset byte.
+        // A late repeat is ignored; MOT low lets the host go on with the registers (the reset
+        // byte went out before the exchange).
         assert_eq!(host.receive(Ok(0x33)), None);
         assert!(!panel.mot());
+        assert_eq!(host.next_byte(), None);
         host.poll_mot(panel.mot());
-        assert_eq!(host.next_byte(), Some(RESET));
+        assert_eq!(host.next_byte(), Some(0));
         assert_eq!(host.stats().keys, 1);
     }
 
@@ -633,16 +761,23 @@ mod tests {
         })
         .unwrap();
         let mut events = Vec::new();
+        host.poll_mot(true);
+        assert_eq!(host.next_byte(), Some(RESET));
+        assert_eq!(host.next_byte(), None);
         for _ in 0..20 {
             events.extend(host.poll_mot(true));
         }
         assert_eq!(events, vec![HostEvent::KeyTimedOut, HostEvent::MotStuck]);
-        assert_eq!(host.next_byte(), Some(RESET));
-        // Still ignoring the stuck MOT until it drops once.
-        assert_eq!(host.poll_mot(true), None);
+        // Still ignoring the stuck MOT until it drops once: whole sequences go out.
+        for _ in 0..3 {
+            assert_eq!(host.poll_mot(true), None);
+            assert!((0..8).all(|_| host.next_byte().is_some()));
+        }
         assert!(!host.san());
+        // MOT dropped once: the next boundary between sequences (here, now) takes the key.
         host.poll_mot(false);
         host.poll_mot(true);
+        assert_eq!(host.next_byte(), None);
         assert!(host.san());
     }
 

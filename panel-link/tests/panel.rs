@@ -80,8 +80,11 @@ struct Sim<const R: usize> {
     damage: Damage,
     delivered: Vec<u8>,
     timeouts: u64,
-    /// Sequences completed as the panel sees them (reset bytes that arrived).
+    /// Where in the 20 ms the panel's tick falls (µs).
     tick_phase: u64,
+    /// Flipped into the MOT level the host sees, poll by poll (repeating; empty: none).
+    mot_glitch: Vec<bool>,
+    polls: usize,
 }
 
 impl<const R: usize> Sim<R> {
@@ -96,6 +99,8 @@ impl<const R: usize> Sim<R> {
             delivered: Vec::new(),
             timeouts: 0,
             tick_phase: tick_phase % 20_000,
+            mot_glitch: Vec::new(),
+            polls: 0,
         }
     }
 
@@ -139,7 +144,12 @@ impl<const R: usize> Sim<R> {
             self.up.queue.push_back(framing.encode(key));
         }
         if self.now.is_multiple_of(10_000) {
-            if let Some(HostEvent::KeyTimedOut) = self.host.poll_mot(self.panel.mot()) {
+            let glitch = match self.mot_glitch.len() {
+                0 => false,
+                n => self.mot_glitch[self.polls % n],
+            };
+            self.polls += 1;
+            if let Some(HostEvent::KeyTimedOut) = self.host.poll_mot(self.panel.mot() ^ glitch) {
                 self.timeouts += 1;
             }
         }
@@ -252,6 +262,39 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(100))]
+
+    /// A MOT wire that chatters (any level flipped at any poll, repeating): keys are still never
+    /// duplicated or altered, and the displays keep being refreshed; once the wire behaves again,
+    /// the keys still waiting get through.
+    #[test]
+    fn a_chattering_mot_never_duplicates_or_alters_a_key(
+        keys in proptest::collection::vec(0u8..=255, 1..6),
+        glitch in proptest::collection::vec(any::<bool>(), 1..40),
+        phase in 0u64..200,
+    ) {
+        let mut sim: Sim<7> = Sim::new(Damage::None, phase * 100);
+        sim.mot_glitch = glitch;
+        for &k in &keys {
+            sim.panel.press(k).unwrap();
+        }
+        let before = sim.host.stats().sequences;
+        sim.run_ms(3_000);
+        let mut rest = keys.iter();
+        for d in &sim.delivered {
+            prop_assert!(rest.any(|k| k == d), "delivered {:?} from pressed {:?}", sim.delivered, keys);
+        }
+        // 3 s with at most 1.1 s between sequences (default configuration).
+        prop_assert!(sim.host.stats().sequences - before >= 2);
+        let (delivered, waiting) = (sim.delivered.len(), sim.panel.keys_waiting());
+        sim.mot_glitch.clear();
+        sim.run_ms(3_000);
+        prop_assert_eq!(sim.panel.keys_waiting(), 0);
+        prop_assert_eq!(sim.delivered.len(), delivered + waiting);
+    }
+}
+
 #[test]
 fn a_panel_that_was_off_is_right_after_the_next_full_sequence() {
     // The panel powers up in the middle of a sequence: it ignores bytes until the first reset.
@@ -264,4 +307,479 @@ fn a_panel_that_was_off_is_right_after_the_next_full_sequence() {
     assert_eq!(sim.panel.registers(), &[0; 46]);
     sim.run_sequences(1);
     assert_eq!(sim.panel.registers(), sim.host.registers());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bit errors in the register stream (issue 19, item 5): what the panel may show.
+// ---------------------------------------------------------------------------------------------
+
+use regler_panel_link::line::{BitReceiver, LineError};
+use regler_panel_link::panel::{MAX_VALUE, RESET};
+
+/// The host's byte stream, from the host machine itself: sequence `a`, then sequence `b` (the
+/// host's registers changed once the first sequence was counted), then `b` again, and so on.
+/// Returns the bytes; reset bytes stand at every multiple of `R + 1`.
+fn stream<const R: usize>(a: &[u8; R], b: &[u8; R], bytes: usize) -> Vec<u8> {
+    let mut host: Host<R> = Host::new(HostConfig::default()).unwrap();
+    for (i, &v) in a.iter().enumerate() {
+        host.set(i, v).unwrap();
+    }
+    let mut out = Vec::new();
+    while out.len() < bytes {
+        out.push(host.next_byte().expect("no MOT: the host always sends"));
+        if host.stats().sequences == 1 {
+            for (i, &v) in b.iter().enumerate() {
+                host.set(i, v).unwrap();
+            }
+        }
+    }
+    for (k, &byte) in out.iter().enumerate() {
+        assert_eq!(byte == RESET, k % (R + 1) == 0, "the stream's layout");
+    }
+    out
+}
+
+/// Per register, the set of values (bit `v` of a `u128`) the panel may show.
+fn allowed<const R: usize>(a: &[u8; R], b: &[u8; R]) -> [u128; R] {
+    core::array::from_fn(|i| 1 | (1 << a[i]) | (1 << b[i]))
+}
+
+/// Every register shows a value in its allowed set.
+fn assert_allowed<const R: usize>(shown: &[u8; R], allowed: &[u128; R], what: &dyn Fn() -> String) {
+    for (i, (&v, &set)) in shown.iter().zip(allowed).enumerate() {
+        assert!(
+            v <= MAX_VALUE && set >> v & 1 == 1,
+            "register {i} shows {v}, a value the host never sent for it: display {shown:?}; {}",
+            what()
+        );
+    }
+}
+
+/// Every 1- and 2-bit change of an 11-bit panel frame (start, 8 data, parity, stop).
+fn masks_1_2() -> Vec<u16> {
+    (0..11)
+        .flat_map(|i| (i..11).map(move |j| (1u16 << i) | (1 << j)))
+        .collect()
+}
+
+/// Issue 19 item 5, the example: register 2 = 0x7E with bits 0 and 7 flipped reads as the reset
+/// byte (parity still even). The panel must not show `[40, 50, 60, 70, 50, 60, 70]`.
+#[test]
+fn issue_example_a_2_bit_error_never_shifts_the_display() {
+    let values = [10u8, 20, 126, 40, 50, 60, 70];
+    let bytes = stream::<7>(&values, &values, 4 * 8 + 1);
+    let framing = Framing::PANEL;
+    let damaged = 8 + 1 + 2; // the second sequence's register 2
+    assert_eq!(
+        framing.decode(framing.encode(bytes[damaged]) ^ (0x81 << 1)),
+        Ok(RESET)
+    );
+    let mut panel: Panel<7> = Panel::new();
+    for (k, &byte) in bytes.iter().enumerate() {
+        let mut frame = framing.encode(byte);
+        if k == damaged {
+            frame ^= 0x81 << 1;
+        }
+        panel.receive(framing.decode(frame));
+        if k >= 8 {
+            assert!(
+                panel.registers() == &values,
+                "after byte {k}: the panel shows {:?}",
+                panel.registers()
+            );
+        }
+    }
+}
+
+/// Every 1- and 2-bit error of one frame (data, parity, start and stop bits), for every value
+/// 0..=127 of every register and for the reset bytes on both sides of the sequence, and a 1-bit
+/// error in each of any two frames from one of those reset bytes to the other: after every
+/// byte each register shows a value the host sent for that register — or, only for the register
+/// whose own byte took an error that the parity cannot see, that wrong 7-bit value — and once the
+/// next clean sequence (with the reset bytes on both sides) is through, every register is right.
+fn every_frame_error<const R: usize>() {
+    let framing = Framing::PANEL;
+    let masks = masks_1_2();
+    // Distinct values per register and per sequence, so that a shift shows.
+    let a: [u8; R] = core::array::from_fn(|i| (i % 64) as u8);
+    let base_b: [u8; R] = core::array::from_fn(|i| (64 + i % 64) as u8);
+    let seq = R + 1;
+    let mut cases = 0u64;
+    // Damage at stream index d: the reset before b (seq), b's registers, the reset after b.
+    for d in seq..=2 * seq {
+        let register = d.checked_sub(seq + 1).filter(|&r| r < R);
+        let values: Vec<u8> = match register {
+            Some(_) => (0..=MAX_VALUE).collect(),
+            None => vec![base_b[0]],
+        };
+        for &v in &values {
+            let mut b = base_b;
+            if let Some(r) = register {
+                b[r] = v;
+            }
+            let bytes = stream::<R>(&a, &b, 5 * seq);
+            // The first reset after d starts the next clean sequence.
+            let clean_end = (d / seq + 1) * seq + seq;
+            let mut prefix: Panel<R> = Panel::new();
+            for &byte in &bytes[..d] {
+                prefix.receive(Ok(byte));
+            }
+            let mut outcomes: Vec<Result<u8, LineError>> = masks
+                .iter()
+                .map(|&m| framing.decode(framing.encode(bytes[d]) ^ m))
+                .collect();
+            outcomes.sort_by_key(|o| format!("{o:?}"));
+            outcomes.dedup();
+            for got in outcomes {
+                cases += 1;
+                let mut allow = allowed(&a, &b);
+                if let (Some(r), Ok(w)) = (register, got) {
+                    if w <= MAX_VALUE {
+                        allow[r] |= 1 << w; // undetectable: the parity sees even flips only
+                    }
+                }
+                let what = || format!("R {R}, byte {d} (value {}) received as {got:?}", bytes[d]);
+                let mut panel = prefix.clone();
+                panel.receive(got);
+                let mut last = *panel.registers();
+                assert_allowed(&last, &allow, &what);
+                for &byte in &bytes[d + 1..=clean_end] {
+                    panel.receive(Ok(byte));
+                    if panel.registers() != &last {
+                        last = *panel.registers();
+                        assert_allowed(&last, &allow, &what);
+                    }
+                }
+                assert_eq!(
+                    panel.registers(),
+                    &b,
+                    "after the next clean sequence: {}",
+                    what()
+                );
+            }
+        }
+    }
+    assert!(cases > (R as u64) * 128 * 30);
+
+    // One flipped bit in each of two frames, anywhere from the reset byte before b to the reset
+    // byte after it (a 1-bit error reads the same whatever the value: the outcomes are deduped).
+    let bytes = stream::<R>(&a, &base_b, 5 * seq);
+    let one_bit = |d: usize| {
+        let mut o: Vec<Result<u8, LineError>> = (0..11)
+            .map(|k| framing.decode(framing.encode(bytes[d]) ^ (1 << k)))
+            .collect();
+        o.sort_by_key(|o| format!("{o:?}"));
+        o.dedup();
+        o
+    };
+    for d1 in seq..=2 * seq {
+        for d2 in d1 + 1..=2 * seq {
+            for g1 in one_bit(d1) {
+                for g2 in one_bit(d2) {
+                    let allow = allowed(&a, &base_b);
+                    let what = || format!("R {R}, bytes {d1} and {d2} read as {g1:?}, {g2:?}");
+                    let mut panel: Panel<R> = Panel::new();
+                    let mut last = *panel.registers();
+                    let clean_end = (d2 / seq + 1) * seq + seq;
+                    for (k, &byte) in bytes.iter().enumerate().take(clean_end + 1) {
+                        panel.receive(match k {
+                            _ if k == d1 => g1,
+                            _ if k == d2 => g2,
+                            _ => Ok(byte),
+                        });
+                        if panel.registers() != &last {
+                            last = *panel.registers();
+                            assert_allowed(&last, &allow, &what);
+                        }
+                    }
+                    assert_eq!(panel.registers(), &base_b, "{}", what());
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn every_1_and_2_bit_frame_error_loading_desk() {
+    every_frame_error::<7>();
+}
+
+#[test]
+fn every_1_and_2_bit_frame_error_lane_panel() {
+    every_frame_error::<29>();
+}
+
+#[test]
+fn every_1_and_2_bit_frame_error_central_desk() {
+    every_frame_error::<46>();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Whatever the MOT line does (issue 19, item 6): the displays keep being refreshed.
+// ---------------------------------------------------------------------------------------------
+
+/// The host feeding a panel, the transmitter fed the moment it is ready (one byte per byte
+/// time), MOT polled every 10 ms at the level `mot(poll number)` says, no key bytes ever coming
+/// back. The last two registers hold a 14-bit counter the application bumps at every event, so
+/// every sequence the host sends differs from the one before, and a refresh (a sequence that got
+/// through to its last register) shows on the display.
+/// Returns the longest time (µs) the display went without changing, from its first change to
+/// the end of the run, and the number of changes.
+fn longest_refresh_gap<const R: usize>(
+    config: HostConfig,
+    mut mot: impl FnMut(u64) -> bool,
+    run_us: u64,
+) -> (u64, u64) {
+    const { assert!(R >= 2) };
+    let mut host: Host<R> = Host::new(config).unwrap();
+    let mut panel: Panel<R> = Panel::new();
+    let mut in_flight: Option<(u8, u64)> = None;
+    let (mut next_poll, mut poll) = (10_000u64, 0u64);
+    let mut last = *panel.registers();
+    let (mut last_change, mut longest, mut changes) = (None::<u64>, 0u64, 0u64);
+    let mut counter = 0u16;
+    let mut now = 0u64;
+    while now <= run_us {
+        counter = (counter + 1) % (1 << 14);
+        host.set(R - 2, (counter & 0x7F) as u8).unwrap();
+        host.set(R - 1, (counter >> 7) as u8).unwrap();
+        if let Some((byte, at)) = in_flight {
+            if at == now {
+                panel.receive(Ok(byte));
+                in_flight = None;
+                if panel.registers() != &last {
+                    last = *panel.registers();
+                    if let Some(t) = last_change {
+                        longest = longest.max(now - t);
+                    }
+                    last_change = Some(now);
+                    changes += 1;
+                }
+            }
+        }
+        if now == next_poll {
+            let _ = host.poll_mot(mot(poll));
+            poll += 1;
+            next_poll += 10_000;
+        }
+        if in_flight.is_none() {
+            if let Some(byte) = host.next_byte() {
+                in_flight = Some((byte, now + BYTE_US));
+            }
+        }
+        now = in_flight.map_or(next_poll, |(_, at)| at.min(next_poll));
+    }
+    let end_gap = last_change.map_or(run_us, |t| run_us - t);
+    (longest.max(end_gap), changes)
+}
+
+/// The bound the host's docs state: `R + 1` byte times plus `key_timeout_polls +
+/// mot_stuck_polls` polls of 10 ms.
+fn refresh_bound<const R: usize>(config: HostConfig) -> u64 {
+    (R as u64 + 1) * BYTE_US
+        + (u64::from(config.key_timeout_polls) + u64::from(config.mot_stuck_polls)) * 10_000
+}
+
+/// Issue 19 item 6, the examples: MOT toggling at every poll, or dropping one poll in twelve,
+/// froze the displays (0 sequences in 100 s).
+#[test]
+fn issue_example_a_chattering_mot_does_not_freeze_the_displays() {
+    let config = HostConfig::default();
+    for (name, pattern) in [
+        (
+            "toggling",
+            &(|p: u64| p.is_multiple_of(2)) as &dyn Fn(u64) -> bool,
+        ),
+        ("one poll in twelve low", &|p: u64| p % 12 != 11),
+    ] {
+        let (gap, changes) = longest_refresh_gap::<29>(config, pattern, 100_000_000);
+        assert!(
+            gap <= refresh_bound::<29>(config) && changes >= 50,
+            "MOT {name}: {changes} refreshes in 100 s, longest gap {gap} µs"
+        );
+    }
+}
+
+/// Every periodic MOT pattern of period 1 to 8 polls (510 patterns: stuck high, stuck low,
+/// toggling, short glitches…), two configurations: the display is refreshed at least every
+/// bound.
+#[test]
+fn every_short_periodic_mot_pattern_keeps_the_displays_refreshed() {
+    for config in [
+        HostConfig::default(),
+        HostConfig {
+            key_timeout_polls: 1,
+            mot_stuck_polls: 1,
+        },
+        HostConfig {
+            key_timeout_polls: 3,
+            mot_stuck_polls: 5,
+        },
+    ] {
+        let bound = refresh_bound::<7>(config);
+        for period in 1..=8u32 {
+            for bits in 0..(1u32 << period) {
+                let mot = |p: u64| bits >> (p % u64::from(period)) & 1 == 1;
+                let (gap, _) = longest_refresh_gap::<7>(config, mot, 5_000_000);
+                assert!(
+                    gap <= bound,
+                    "MOT pattern {bits:0period$b} (period {period}), {config:?}: the display \
+                     went {gap} µs without a refresh (bound {bound} µs)",
+                    period = period as usize
+                );
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// Any MOT pattern (random levels, random run lengths), any accepted configuration: the
+    /// display is refreshed at least every bound.
+    #[test]
+    fn any_mot_pattern_keeps_the_displays_refreshed(
+        runs in proptest::collection::vec((any::<bool>(), 1u64..150), 1..40),
+        key_timeout_polls in 1u16..30,
+        mot_stuck_polls in 1u16..150,
+    ) {
+        let config = HostConfig { key_timeout_polls, mot_stuck_polls };
+        let levels: Vec<bool> = runs.iter().flat_map(|&(l, n)| (0..n).map(move |_| l)).collect();
+        let (gap, _) = longest_refresh_gap::<29>(config, |p| levels[(p % levels.len() as u64) as usize], 10_000_000);
+        prop_assert!(gap <= refresh_bound::<29>(config), "gap {} µs", gap);
+    }
+}
+
+/// The register stream as bits on the line, frames back to back as a UART sends them when it is
+/// fed whenever it is ready, through a bit receiver (which loses character sync when a start bit
+/// is hit, and finds it again — or not: see below): every single bit and every pair of bits
+/// flipped anywhere in the frames from the reset byte before a sequence to the reset byte after
+/// it. After every byte, every register shows a value the host sent for it, or — only for the
+/// register whose own frame took the flips, read in sync — that wrong 7-bit value. Once the
+/// receiver reads a reset byte in sync again after the flips, the display is right when the
+/// next sequence is through. Returns (cases, cases still out of sync after ten sequences).
+fn every_bit_pair_on_the_line<const R: usize>(a: &[u8; R], b: &[u8; R]) -> (u64, u64) {
+    let framing = Framing::PANEL;
+    let seq = R + 1;
+    let bytes = stream::<R>(a, b, 14 * seq);
+    let mut bits: Vec<bool> = vec![true; 3];
+    for &byte in &bytes {
+        let frame = framing.encode(byte);
+        bits.extend((0..11).map(|k| frame >> k & 1 == 1));
+    }
+    let first = 3 + 11 * seq;
+    let window = first..first + 11 * (seq + 1);
+    // The prefix is clean: run it once.
+    let mut rx0 = BitReceiver::new(framing);
+    let mut panel0: Panel<R> = Panel::new();
+    for &bit in &bits[..first] {
+        if let Some(got) = rx0.bit(bit) {
+            panel0.receive(got);
+        }
+    }
+    // Ten whole clean sequences after the window.
+    let end = first + 11 * (12 * seq + 1);
+    let (mut cases, mut lost) = (0, 0);
+    for i in window.clone() {
+        for j in i..window.end {
+            cases += 1;
+            let (mut rx, mut panel) = (rx0, panel0.clone());
+            let mut allow = allowed(a, b);
+            let mut last = *panel.registers();
+            let mut right_by = None;
+            for (k, &bit) in bits[first..end].iter().enumerate() {
+                let k = k + first;
+                let Some(got) = rx.bit(bit ^ (k == i || k == j)) else {
+                    continue;
+                };
+                // The frame ending here, if the receiver is in sync.
+                let aligned = (k + 1 - 3).is_multiple_of(11);
+                let index = ((k + 1 - 3) / 11).saturating_sub(1);
+                let hit = (k + 1 - 11..=k).contains(&i) || (k + 1 - 11..=k).contains(&j);
+                if let Ok(w) = got {
+                    if hit && aligned && w <= MAX_VALUE && !index.is_multiple_of(seq) {
+                        allow[index % seq - 1] |= 1 << w; // cannot be told from a good byte
+                    }
+                    if w == RESET
+                        && aligned
+                        && index.is_multiple_of(seq)
+                        && k > j
+                        && right_by.is_none()
+                    {
+                        right_by = Some(k + 11 * seq);
+                    }
+                }
+                panel.receive(got);
+                if panel.registers() != &last {
+                    last = *panel.registers();
+                    assert_allowed(&last, &allow, &|| {
+                        format!("bits {i} and {j} flipped, bytes {bytes:?}")
+                    });
+                }
+                if right_by == Some(k) {
+                    assert_eq!(
+                        panel.registers(),
+                        b,
+                        "bits {i} and {j} flipped: not right after the first sequence in sync"
+                    );
+                }
+            }
+            if right_by.is_none_or(|k| k >= end) {
+                lost += 1;
+            }
+        }
+    }
+    (cases, lost)
+}
+
+#[test]
+fn every_1_and_2_bit_error_on_the_line() {
+    let mut cases = 0;
+    let issue = [10u8, 20, 126, 40, 50, 60, 70];
+    let distinct: [u8; 7] = core::array::from_fn(|i| 100 + i as u8);
+    for (a, b) in [
+        (distinct, issue),
+        (issue, distinct),
+        ([0x7F; 7], [0x7E; 7]),
+        ([0x7E; 7], [0x7F; 7]),
+        ([0; 7], [0x7F; 7]),
+        ([0x7F; 7], [0; 7]),
+        (
+            [0x3F, 0x5F, 0x6F, 0x77, 0x7B, 0x7D, 0x7E],
+            [0x7F, 0x3F, 0x5F, 0x6F, 0x77, 0x7B, 0x7D],
+        ),
+        (
+            [1, 2, 4, 8, 16, 32, 64],
+            [0x55, 0x2A, 0x55, 0x2A, 0x55, 0x2A, 0x55],
+        ),
+    ] {
+        let (n, out_of_sync) = every_bit_pair_on_the_line::<7>(&a, &b);
+        println!(
+            "{a:?} then {b:?}: {n} cases, {out_of_sync} still out of character sync after ten sequences"
+        );
+        cases += n;
+    }
+    assert!(cases > 8 * 4_000);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// A key pressed at any moment raises SÄN within one sequence (`R + 1` byte times; the
+    /// simulation's 100 µs steps add up to one step per byte) plus one MOT poll.
+    #[test]
+    fn a_key_waits_at_most_one_sequence_and_a_poll(after_us in 0u64..200_000) {
+        let mut sim: Sim<29> = Sim::new(Damage::None, 0);
+        sim.run_ms(after_us / 1000);
+        for _ in 0..(after_us % 1000) / STEP_US {
+            sim.step();
+        }
+        sim.panel.press(0x41).unwrap();
+        let pressed = sim.now;
+        while !sim.host.san() {
+            sim.step();
+        }
+        let bound = 30 * (BYTE_US + STEP_US) + 10_000;
+        prop_assert!(sim.now - pressed <= bound, "{} µs", sim.now - pressed);
+    }
 }

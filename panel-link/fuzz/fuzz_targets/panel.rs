@@ -1,20 +1,31 @@
-//! Arbitrary events into a panel and a host: bytes (clean or with a line error), MOT polls, SÄN
-//! changes, key presses and ticks. No panic; the registers only ever hold 7-bit values; once MOT
-//! is released and a clean full sequence is through, the panel shows the host's registers (it
-//! always recovers, whatever came before).
+//! Two parts, chosen by the first input byte.
+//!
+//! Even: arbitrary events into a panel and a host: bytes (clean or with a line error), MOT polls,
+//! SÄN changes, key presses and ticks. No panic; the registers only ever hold 7-bit values; once
+//! MOT is released and a clean full sequence is through, the panel shows the host's registers
+//! (it always recovers, whatever came before).
+//!
+//! Odd: the host's stream of two register sets `a` then `b` (from the input), framed, with up to
+//! two bits flipped anywhere (positions from the input), read frame by frame or through a bit
+//! receiver: after every byte every register shows a value the host sent for it, or the 7-bit
+//! value its own frame was turned into (the parity cannot see two flips); read frame by frame, the
+//! display is `b` once the next clean sequence after the flips is through.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use regler_panel_link::line::LineError;
-use regler_panel_link::panel::{Host, HostConfig, MAX_VALUE, Panel};
+use regler_panel_link::line::{BitReceiver, Framing, LineError};
+use regler_panel_link::panel::{Host, HostConfig, MAX_VALUE, Panel, RESET};
 
-fuzz_target!(|data: &[u8]| {
-    let mut host: Host<7> = Host::new(HostConfig {
+const R: usize = 7;
+const SEQ: usize = R + 1;
+
+fn events(data: &[u8]) {
+    let mut host: Host<R> = Host::new(HostConfig {
         key_timeout_polls: 3,
         mot_stuck_polls: 5,
     })
     .unwrap();
-    let mut panel: Panel<7> = Panel::new();
+    let mut panel: Panel<R> = Panel::new();
     for pair in data.chunks_exact(2) {
         let (op, arg) = (pair[0], pair[1]);
         match op % 8 {
@@ -53,15 +64,108 @@ fuzz_target!(|data: &[u8]| {
         assert!(panel.registers().iter().all(|&v| v <= MAX_VALUE));
         assert!(host.registers().iter().all(|&v| v <= MAX_VALUE));
     }
-    // Liveness: release MOT, let the host refresh twice, and the panel agrees.
+    // Liveness: release MOT (a key exchange in progress times out and ends), then the rest of
+    // the sequence under way, a whole one and the reset byte closing it: at most 2 R + 2 bytes.
     for _ in 0..20 {
         let _ = host.poll_mot(false);
     }
-    // Two sequences' worth of bytes hold one whole sequence, reset byte first.
-    for _ in 0..16 {
-        if let Some(byte) = host.next_byte() {
-            panel.receive(Ok(byte));
-        }
+    for _ in 0..2 * SEQ {
+        let byte = host.next_byte().expect("MOT low: the host sends");
+        panel.receive(Ok(byte));
     }
     assert_eq!(panel.registers(), host.registers());
+}
+
+fn bit_errors(data: &[u8]) {
+    if data.len() < 2 * R + 5 {
+        return;
+    }
+    let a: [u8; R] = core::array::from_fn(|i| data[i] & 0x7F);
+    let b: [u8; R] = core::array::from_fn(|i| data[R + i] & 0x7F);
+    let flips = usize::from(data[2 * R] % 3);
+    let total = 6 * SEQ;
+    let bits_total = 3 + 11 * total;
+    let pos = |k: usize| {
+        usize::from(u16::from_le_bytes([data[2 * R + 1 + 2 * k], data[2 * R + 2 + 2 * k]]))
+            % (11 * 3 * SEQ)
+    };
+    let flipped: Vec<usize> = (0..flips).map(|k| 3 + pos(k)).collect();
+    let bit_level = data.get(2 * R + 5).is_some_and(|m| m & 1 == 1);
+
+    let mut host: Host<R> = Host::new(HostConfig::default()).unwrap();
+    for (i, &v) in a.iter().enumerate() {
+        host.set(i, v).unwrap();
+    }
+    let mut bytes = Vec::new();
+    while bytes.len() < total {
+        bytes.push(host.next_byte().unwrap());
+        if host.stats().sequences == 1 {
+            for (i, &v) in b.iter().enumerate() {
+                host.set(i, v).unwrap();
+            }
+        }
+    }
+    let framing = Framing::PANEL;
+    let mut line = vec![true; 3];
+    for &byte in &bytes {
+        let frame = framing.encode(byte);
+        line.extend((0..11).map(|k| frame >> k & 1 == 1));
+    }
+    assert_eq!(line.len(), bits_total);
+    for &f in &flipped {
+        line[f] = !line[f];
+    }
+    let mut allow: [u128; R] = core::array::from_fn(|i| 1 | 1 << a[i] | 1 << b[i]);
+    let mut panel: Panel<R> = Panel::new();
+    let mut rx = BitReceiver::new(framing);
+    let check = |panel: &Panel<R>, allow: &[u128; R]| {
+        for (i, &v) in panel.registers().iter().enumerate() {
+            assert!(
+                v <= MAX_VALUE && allow[i] >> v & 1 == 1,
+                "register {i} shows {v}: a {a:?}, b {b:?}, flipped {flipped:?}"
+            );
+        }
+    };
+    for (n, _) in bytes.iter().enumerate() {
+        let from = 3 + 11 * n;
+        if bit_level {
+            for k in from..from + 11 {
+                if let Some(got) = rx.bit(line[k]) {
+                    let aligned = (k + 1 - 3) % 11 == 0;
+                    let hit = flipped.iter().any(|f| (k + 1 - 11..=k).contains(f));
+                    if let (Ok(w), true, true) = (got, aligned, hit) {
+                        if w <= MAX_VALUE && n % SEQ > 0 {
+                            allow[n % SEQ - 1] |= 1 << w;
+                        }
+                    }
+                    panel.receive(got);
+                    check(&panel, &allow);
+                }
+            }
+        } else {
+            let frame = (0..11).fold(0u16, |f, k| f | u16::from(line[from + k]) << k);
+            let got = framing.decode(frame);
+            if let Ok(w) = got {
+                if w <= MAX_VALUE && n % SEQ > 0 && w != bytes[n] {
+                    allow[n % SEQ - 1] |= 1 << w;
+                }
+            }
+            panel.receive(got);
+            check(&panel, &allow);
+        }
+    }
+    if !bit_level {
+        // The flips lie in the first three sequences: the sixth is clean, and so are the resets
+        // on both sides of the fifth.
+        assert_eq!(bytes[4 * SEQ], RESET);
+        assert_eq!(panel.registers(), &b, "flipped {flipped:?}");
+    }
+}
+
+fuzz_target!(|data: &[u8]| {
+    match data.split_first() {
+        Some((mode, rest)) if mode & 1 == 1 => bit_errors(rest),
+        Some((_, rest)) => events(rest),
+        None => {}
+    }
 });
