@@ -181,20 +181,26 @@ pub fn panel_sequence_and_key() -> Outcome {
         host.set(usize::from(i), i + 10).map_err(|_| "set")?;
     }
     let framing = Framing::PANEL;
-    // One sequence with byte 5 damaged on the line, then a clean one; a sequence is shown when
-    // the reset byte after it arrives.
-    for k in 0..60u32 {
-        let byte = host.next_byte().ok_or("host stopped")?;
+    // One sequence with a byte damaged on the line, then a clean one; a sequence is shown when
+    // the reset byte after it arrives, and only if all its bytes were clean. Byte times: the
+    // reset byte, an idle byte time (`None`), 29 registers.
+    let mut sent = 0u32;
+    for _ in 0..62u32 {
+        let Some(byte) = host.next_byte() else {
+            continue; // the idle byte time after a reset byte
+        };
         let mut frame = framing.encode(byte);
-        if k == 5 {
+        if sent == 5 {
             frame ^= 1 << 4;
         }
+        sent += 1;
         panel.receive(framing.decode(frame));
-        if k == 30 {
-            check!(panel.registers()[4] == 0); // damaged in the first sequence: kept its old value
-            check!(panel.registers()[5] == 15);
+        if sent == 31 {
+            check!(panel.registers()[4] == 0); // the damaged sequence is not shown
+            check!(panel.stats().discarded == 1);
         }
     }
+    check!(sent == 60);
     check!(panel.registers()[4] == 0); // the second sequence is shown when its reset arrives
     panel.receive(framing.decode(framing.encode(host.next_byte().ok_or("host stopped")?)));
     check!(panel.registers() == host.registers());
@@ -211,6 +217,7 @@ pub fn panel_sequence_and_key() -> Outcome {
     check!(panel.set_san(host.san()).is_none());
     check!(!panel.mot());
     check!(host.poll_mot(panel.mot()).is_none());
+    check!(host.next_byte().is_none()); // the idle byte time after the reset byte
     check!(host.next_byte() == Some(10)); // the registers go on: the reset went before
     Ok(())
 }

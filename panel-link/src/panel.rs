@@ -2,45 +2,53 @@
 //! with an endless byte sequence and takes key presses over a MOT/SÄN handshake.
 //!
 //! # On the wire
-//! The host sends, forever, the **reset byte** [`RESET`] (`0xFF`) and one byte per register, in
-//! register order: `RESET r1 … rR RESET r1 … rR RESET …`. **Register bytes carry 7 bits** (0–127,
-//! bit 8 always 0), so no register value is the reset byte; [`Host::set`] refuses a value above
-//! 127 ([`RegisterError::Value`]). On the line each byte is framed with a start bit, 8 data bits,
-//! an even parity bit and a stop bit ([`crate::line::Framing::PANEL`]).
+//! The host sends, forever, the **reset byte** [`RESET`] (`0xFF`), one byte time of idle line,
+//! and one byte per register, in register order: `RESET · r1 … rR RESET · r1 … rR …` (`·` =
+//! idle). **Register bytes carry 7 bits** (0–127, bit 8 always 0), so no register value is the
+//! reset byte; [`Host::set`] refuses a value above 127 ([`RegisterError::Value`]). On the line
+//! each byte is framed with a start bit, 8 data bits, an even parity bit and a stop bit
+//! ([`crate::line::Framing::PANEL`]).
 //!
 //! The panel's counter, zeroed by a reset byte, says which register a byte is for; the panel
 //! **stages** the bytes and shows them only when the next reset byte arrives after **exactly
-//! `R` bytes** (beyond the source, which latched each byte at once). A byte that arrives with a
-//! framing or parity error, or with bit 8 set, still moves the counter on: its register keeps
-//! the value it showed. A reset byte after fewer or more bytes drops what was staged
-//! ([`PanelStats::discarded`]); the display keeps what it showed.
+//! `R` clean bytes**. A byte that arrives with a framing or parity error, or with bit 8 set,
+//! drops the sequence it falls in; so does a reset byte after fewer or more bytes
+//! ([`PanelStats::discarded`]); the display keeps what it showed, and the next reset byte starts
+//! afresh. (The source latched each byte at once and let a damaged byte keep its register's old
+//! value; see below for why a damaged byte now costs its whole sequence, and the idle byte time
+//! is there.)
 //!
 //! # What the panel shows after a bit error
 //! The parity bit catches every odd number of flipped bits in a frame, and a flipped start or
 //! stop bit is a framing error; two flips among the data and parity bits pass. So a 2-bit error
 //! can turn a register value into the reset byte (`0x7E` → `0xFF`: every value with six or seven
-//! ones), the reset byte into a register value, or one register value into another. Then:
+//! ones), the reset byte into a register value, or one register value into another. A flipped
+//! start bit, or a flipped idle bit read as a start bit, makes a bit receiver lose character
+//! sync: it reads frames that are not the host's until it finds the start bits again, and a
+//! second flip can make such a frame pass the parity. Then:
 //! - After **any 1- or 2-bit error anywhere in the stream** (in one frame, or one bit in each of
 //!   two), **no register ever shows a value the host did not send for that register** (in this
-//!   or an earlier sequence; before the first sequence, 0): never a shifted display. The one exception the link cannot see: a register whose own byte took two
-//!   flips that still pass the parity shows that wrong 7-bit value until the next clean sequence
-//!   (the source has no checksum to catch it).
-//! - **Every register shows the host's value once the next clean sequence is through** (the one
-//!   that begins with the first reset byte after the damage, up to and including the reset byte
-//!   that closes it). A damaged reset byte or a register byte read as a reset byte costs at most
-//!   the sequences on both sides of it: the display is one or two sequences older, never wrong.
+//!   or an earlier sequence; before the first sequence, 0): never a shifted display. The one
+//!   exception the link cannot see: a register whose own frame took both flips (for the first
+//!   register, its frame and the idle byte time before it) may show a wrong 7-bit value until
+//!   the next clean sequence (the source has no checksum to catch it).
+//! - **Every register shows the host's value at most two sequences after the damage**: once
+//!   the receiver has read a reset byte in sync again — the idle byte time after every reset
+//!   byte lets a receiver that lost sync find the start bits again, whatever the data — the
+//!   sequence after it is shown whole. A damaged reset byte or a register byte read as a reset
+//!   byte costs at most the sequences on both sides of it: the display is one or two sequences
+//!   older, never wrong.
 //!
-//! These hold for a receiver that stays in character sync (every frame read as a frame, e.g.
-//! the host's bytes are clean at the start and stop bits) — tested for every value 0–127 at
-//! every position of 7, 29 and 46 registers and every 1- and 2-bit change of its frame and of
-//! the reset bytes on both sides — and, for the first sentence, also when a flipped start bit
-//! makes a bit receiver ([`crate::line::BitReceiver`]) lose character sync on back-to-back
-//! frames (tested for every bit pair over a whole sequence and its reset bytes, eight sets of
-//! values). **Limit:** out of sync, a receiver can read every frame as a framing error for as
-//! long as the data repeats (all registers even, e.g. `0x7E` or 0, after a start bit was hit
-//! in a run of `0x7F`s): the display is then not refreshed — stale, never wrong —
-//! until an idle gap in the stream (a key exchange, or the host stopping) lets it find the start
-//! bits again. The host never leaves such a gap by itself.
+//! Tested for every value 0–127 at every position of 7, 29 and 46 registers and every 1- and
+//! 2-bit change of its frame and of the reset bytes on both sides (frames read in sync), and at
+//! bit level, through a bit receiver ([`crate::line::BitReceiver`]), for every pair of bits
+//! flipped anywhere from the reset byte before a sequence to the reset byte after it — start,
+//! stop and idle bits included — with eight sets of values chosen to be hard (runs of `0x7F`,
+//! `0x7E`, 0, single bits, alternating bits). Without the idle byte time a receiver out of sync
+//! could read every frame as a framing error for as long as the data repeated (a display stale
+//! for good); without dropping a sequence on a damaged byte, frames read out of sync that passed
+//! the parity could be shown. The price: one byte time per sequence (`R + 2` byte times), and
+//! under noise a damaged byte costs its whole sequence, not one register, for one sequence.
 //!
 //! # The key handshake
 //! - The panel has a key: it raises **MOT**.
@@ -58,16 +66,19 @@
 //!   forgets the key; the host waits for MOT low and goes on with the registers (the reset byte
 //!   went out before the exchange), and sends a whole sequence before it answers MOT again.
 //!
-//! A key waits at most one sequence (`R + 1` byte times) plus a poll before SÄN rises.
+//! A key waits at most one sequence (`R + 2` byte times) plus a poll and a byte time before
+//! SÄN rises.
 //!
 //! Beyond the source: the host gives up on a key after [`HostConfig::key_timeout_polls`] polls
 //! ([`HostEvent::KeyTimedOut`]) and on a MOT line that never drops after
 //! [`HostConfig::mot_stuck_polls`] ([`HostEvent::MotStuck`]: it goes back to refreshing and
 //! ignores MOT until it has seen it low). So **whatever the MOT line does** (stuck high, stuck
-//! low, toggling at every poll, glitching), when the transmitter is given a byte whenever it is
-//! ready and MOT is polled every 10 ms, **the panel shows a new sequence at least every `R + 1`
-//! byte times plus `key_timeout_polls + mot_stuck_polls` polls** (with the defaults and 29
-//! registers: 69 ms + 1.1 s; 69 ms while nobody presses a key).
+//! low, toggling at every poll, glitching), when the transmitter asks [`Host::next_byte`] once
+//! per byte time and MOT is polled every 10 ms, on a clean line **the panel shows a new sequence
+//! at least every `R + 3` byte times plus `key_timeout_polls + mot_stuck_polls` polls** (the
+//! third byte time: a transmitter that asks once per byte time sees the host sending again up
+//! to a byte time after the poll that ends an exchange; with the defaults and 29 registers:
+//! 73 ms + 1.1 s), and every `R + 2` byte times while nobody presses a key (71 ms).
 
 use core::fmt;
 
@@ -87,9 +98,6 @@ pub const LANE_PANEL: usize = 29;
 pub const CENTRAL_DESK: usize = 46;
 /// Keys a panel holds while the host has not taken them.
 pub const KEY_QUEUE: usize = 8;
-
-/// A staged register whose byte arrived damaged: it keeps its old value.
-const KEEP: u8 = 0xFF;
 
 /// Why a register could not be set.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -156,7 +164,7 @@ pub struct HostConfig {
     /// Polls waiting for MOT to drop before the host refreshes again regardless (default 100).
     ///
     /// `key_timeout_polls + mot_stuck_polls` polls is the longest a key exchange lasts, so the
-    /// panel shows a new sequence at least every `R + 1` byte times plus that many polls.
+    /// panel shows a new sequence at least every `R + 3` byte times plus that many polls.
     pub mot_stuck_polls: u16,
 }
 
@@ -217,8 +225,11 @@ enum HostState {
 /// let mut host: Host<7> = Host::new(HostConfig::default())?;
 /// let mut panel: Panel<7> = Panel::new();
 /// host.set(2, 99)?;
-/// for _ in 0..8 {
-///     let byte = host.next_byte().unwrap_or(RESET); // the reset byte, then 7 registers
+/// assert_eq!(host.next_byte(), Some(RESET));
+/// panel.receive(Ok(RESET));
+/// assert_eq!(host.next_byte(), None); // one byte time of idle line after the reset byte
+/// for _ in 0..7 {
+///     let byte = host.next_byte().unwrap_or(RESET); // the 7 registers
 ///     panel.receive(Ok(byte));
 /// }
 /// assert_eq!(panel.registers()[2], 0); // staged: shown when the next reset byte arrives
@@ -240,6 +251,8 @@ pub struct Host<const R: usize> {
     between: bool,
     /// The registers of a sequence have gone out: the next reset byte completes it.
     open: bool,
+    /// The idle byte time after the reset byte has been left.
+    gap: bool,
     stats: HostStats,
 }
 
@@ -265,6 +278,7 @@ impl<const R: usize> Host<R> {
             ignore_mot: false,
             between: false,
             open: false,
+            gap: false,
             stats: HostStats {
                 sequences: 0,
                 keys: 0,
@@ -308,8 +322,13 @@ impl<const R: usize> Host<R> {
         &self.stats
     }
 
-    /// The transmitter is ready: the next byte of the stream, or `None` while the host is not
-    /// sending (SÄN up, or waiting for MOT to drop).
+    /// The transmitter is ready: the next byte of the stream, or `None`: leave the line idle
+    /// for this byte time. Call it once per byte time (one frame) while the transmitter is
+    /// ready, also after a `None`.
+    ///
+    /// `None` comes once per sequence, for one byte time after its reset byte (an idle frame on
+    /// the line lets a receiver that lost character sync find the start bits again), and while
+    /// the host is not sending (SÄN up, or waiting for MOT to drop).
     ///
     /// Right after a reset byte, if the last MOT poll saw MOT high, the host raises SÄN here
     /// (and returns `None`) instead of starting the next sequence; it never does so inside a
@@ -336,6 +355,13 @@ impl<const R: usize> Host<R> {
                 };
                 return None;
             }
+            if !core::mem::replace(&mut self.gap, true) {
+                // One byte time of idle line after the reset byte: a bit receiver that lost
+                // character sync (a flipped start bit on back-to-back frames) finds the start
+                // bits again before the registers.
+                return None;
+            }
+            self.gap = false;
             self.sending = self.registers;
         }
         let byte = self
@@ -450,7 +476,8 @@ pub struct PanelStats {
     /// Sequences shown: a reset byte arrived after exactly `R` bytes since the reset before.
     pub shown: u64,
     /// Sequences not shown: a reset byte arrived after 1 to `R − 1` bytes, or after more than
-    /// `R`, since the reset before (a byte became a reset byte, or a reset byte was damaged).
+    /// `R`, since the reset before (a byte became a reset byte, or a reset byte was damaged),
+    /// or a damaged byte arrived in them.
     pub discarded: u64,
     /// Bytes with a framing or parity error, or with bit 8 set but not the reset byte.
     pub bad_bytes: u64,
@@ -477,7 +504,7 @@ pub struct PanelStats {
 #[derive(Clone, Debug)]
 pub struct Panel<const R: usize> {
     registers: [u8; R],
-    /// The sequence being received: per register its 7-bit value, or [`KEEP`] for a damaged byte.
+    /// The sequence being received: per register its 7-bit value.
     staged: [u8; R],
     /// Bytes received since the last reset byte; `None` until the first reset byte.
     counter: Option<usize>,
@@ -501,7 +528,7 @@ impl<const R: usize> Panel<R> {
         const { assert!(R > 0, "a panel has at least one register") };
         Self {
             registers: [0; R],
-            staged: [KEEP; R],
+            staged: [0; R],
             counter: None,
             keys: Deque::new(),
             san: false,
@@ -539,11 +566,7 @@ impl<const R: usize> Panel<R> {
             self.stats.resets = self.stats.resets.saturating_add(1);
             match self.counter {
                 Some(n) if n == R => {
-                    for (shown, &staged) in self.registers.iter_mut().zip(&self.staged) {
-                        if staged <= MAX_VALUE {
-                            *shown = staged;
-                        }
-                    }
+                    self.registers = self.staged;
                     self.stats.shown = self.stats.shown.saturating_add(1);
                 }
                 // A reset byte right after a reset byte drops nothing.
@@ -557,15 +580,17 @@ impl<const R: usize> Panel<R> {
             self.stats.overruns = self.stats.overruns.saturating_add(1);
             return;
         };
-        self.counter = Some(at.saturating_add(1));
-        let value = match byte {
-            Ok(value) if value <= MAX_VALUE => value,
-            _ => {
-                // Damaged: the register keeps its old value; the position still counts.
-                self.stats.bad_bytes = self.stats.bad_bytes.saturating_add(1);
-                KEEP
-            }
+        let Ok(value @ 0..=MAX_VALUE) = byte else {
+            // A damaged byte (framing or parity error, or bit 8 set): the receiver may have
+            // lost character sync, and what it reads until it finds the start bits again is
+            // not the host's bytes, yet can pass the parity. Nothing of this sequence is shown;
+            // the next reset byte starts afresh.
+            self.stats.bad_bytes = self.stats.bad_bytes.saturating_add(1);
+            self.stats.discarded = self.stats.discarded.saturating_add(1);
+            self.counter = None;
+            return;
         };
+        self.counter = Some(at.saturating_add(1));
         match self.staged.get_mut(at) {
             Some(slot) => *slot = value,
             None => self.stats.overruns = self.stats.overruns.saturating_add(1),
@@ -668,12 +693,15 @@ mod tests {
         host.set(0, 1).unwrap();
         host.set(2, 1).unwrap();
         assert_eq!(host.next_byte(), Some(RESET));
+        assert_eq!(host.next_byte(), None); // the idle byte time after the reset byte
         assert_eq!(host.next_byte(), Some(1));
         host.set(2, 2).unwrap(); // mid-sequence: goes out next time
         assert_eq!(host.next_byte(), Some(0));
         assert_eq!(host.next_byte(), Some(1));
+        assert_eq!(host.stats().sequences, 0);
         assert_eq!(host.next_byte(), Some(RESET));
         assert_eq!(host.stats().sequences, 1);
+        assert_eq!(host.next_byte(), None);
         assert_eq!(
             [host.next_byte(), host.next_byte(), host.next_byte()],
             [Some(1), Some(0), Some(2)]
@@ -681,7 +709,7 @@ mod tests {
     }
 
     #[test]
-    fn damaged_byte_keeps_its_place() {
+    fn a_damaged_byte_drops_its_sequence() {
         let mut panel: Panel<3> = Panel::new();
         panel.receive(Ok(5)); // before any reset: ignored
         assert_eq!(panel.registers(), &[0, 0, 0]);
@@ -692,10 +720,19 @@ mod tests {
         for b in [Ok(RESET), Ok(4), Err(LineError::Parity), Ok(6), Ok(RESET)] {
             panel.receive(b);
         }
-        assert_eq!(panel.registers(), &[4, 2, 6]);
-        assert_eq!(panel.stats().bad_bytes, 1);
+        assert_eq!(panel.registers(), &[1, 2, 3]); // the damaged sequence is not shown
+        for b in [Ok(7), Err(LineError::Framing), Ok(0x80), Ok(RESET)] {
+            panel.receive(b);
+        }
+        assert_eq!(panel.registers(), &[1, 2, 3]);
+        for b in [Ok(4), Ok(5), Ok(6), Ok(RESET)] {
+            panel.receive(b);
+        }
+        assert_eq!(panel.registers(), &[4, 5, 6]); // the next clean sequence is
+        assert_eq!(panel.stats().bad_bytes, 2);
         assert_eq!(panel.stats().shown, 2);
-        assert_eq!(panel.stats().overruns, 1);
+        assert_eq!(panel.stats().discarded, 2);
+        assert_eq!(panel.stats().overruns, 3);
     }
 
     #[test]
@@ -722,6 +759,7 @@ mod tests {
         let mut host: Host<7> = Host::new(HostConfig::default()).unwrap();
         let mut panel: Panel<7> = Panel::new();
         assert_eq!(host.next_byte(), Some(RESET));
+        assert_eq!(host.next_byte(), None); // idle
         assert_eq!(host.next_byte(), Some(0));
         panel.press(0x33).unwrap();
         assert_eq!(host.poll_mot(panel.mot()), None);
@@ -749,6 +787,7 @@ mod tests {
         assert!(!panel.mot());
         assert_eq!(host.next_byte(), None);
         host.poll_mot(panel.mot());
+        assert_eq!(host.next_byte(), None); // idle, then the registers
         assert_eq!(host.next_byte(), Some(0));
         assert_eq!(host.stats().keys, 1);
     }
@@ -771,7 +810,9 @@ mod tests {
         // Still ignoring the stuck MOT until it drops once: whole sequences go out.
         for _ in 0..3 {
             assert_eq!(host.poll_mot(true), None);
-            assert!((0..8).all(|_| host.next_byte().is_some()));
+            assert_eq!(host.next_byte(), None); // idle after the reset byte
+            assert!((0..7).all(|_| host.next_byte().is_some()));
+            assert_eq!(host.next_byte(), Some(RESET));
         }
         assert!(!host.san());
         // MOT dropped once: the next boundary between sequences (here, now) takes the key.

@@ -5,11 +5,13 @@
 //! MOT is released and a clean full sequence is through, the panel shows the host's registers
 //! (it always recovers, whatever came before).
 //!
-//! Odd: the host's stream of two register sets `a` then `b` (from the input), framed, with up to
-//! two bits flipped anywhere (positions from the input), read frame by frame or through a bit
-//! receiver: after every byte every register shows a value the host sent for it, or the 7-bit
-//! value its own frame was turned into (the parity cannot see two flips); read frame by frame, the
-//! display is `b` once the next clean sequence after the flips is through.
+//! Odd: the host's stream of two register sets `a` then `b` (from the input), framed, with the
+//! idle byte time after every reset byte as eleven 1 bits, up to two bits flipped anywhere
+//! (positions from the input), read frame by frame or through a bit receiver: after every byte
+//! every register shows a value the host sent for it, or — for the register whose own frame took
+//! both flips (for the first register, its frame and the idle byte time before it) — some 7-bit
+//! value (the parity cannot see two flips); the display is `b` once the flips are two sequences
+//! behind.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -17,7 +19,8 @@ use regler_panel_link::line::{BitReceiver, Framing, LineError};
 use regler_panel_link::panel::{Host, HostConfig, MAX_VALUE, Panel, RESET};
 
 const R: usize = 7;
-const SEQ: usize = R + 1;
+/// Byte times per sequence: the reset byte, the idle byte time, the registers.
+const SEQ: usize = R + 2;
 
 fn events(data: &[u8]) {
     let mut host: Host<R> = Host::new(HostConfig {
@@ -65,13 +68,15 @@ fn events(data: &[u8]) {
         assert!(host.registers().iter().all(|&v| v <= MAX_VALUE));
     }
     // Liveness: release MOT (a key exchange in progress times out and ends), then the rest of
-    // the sequence under way, a whole one and the reset byte closing it: at most 2 R + 2 bytes.
+    // the sequence under way, a whole one and the reset byte closing it: at most 2 (R + 2) byte
+    // times (the host leaves one idle byte time after each reset byte).
     for _ in 0..20 {
         let _ = host.poll_mot(false);
     }
     for _ in 0..2 * SEQ {
-        let byte = host.next_byte().expect("MOT low: the host sends");
-        panel.receive(Ok(byte));
+        if let Some(byte) = host.next_byte() {
+            panel.receive(Ok(byte));
+        }
     }
     assert_eq!(panel.registers(), host.registers());
 }
@@ -96,9 +101,10 @@ fn bit_errors(data: &[u8]) {
     for (i, &v) in a.iter().enumerate() {
         host.set(i, v).unwrap();
     }
-    let mut bytes = Vec::new();
-    while bytes.len() < total {
-        bytes.push(host.next_byte().unwrap());
+    // Byte time by byte time: Some(byte), or None for the idle byte time.
+    let mut slots = Vec::new();
+    while slots.len() < total {
+        slots.push(host.next_byte());
         if host.stats().sequences == 1 {
             for (i, &v) in b.iter().enumerate() {
                 host.set(i, v).unwrap();
@@ -107,8 +113,8 @@ fn bit_errors(data: &[u8]) {
     }
     let framing = Framing::PANEL;
     let mut line = vec![true; 3];
-    for &byte in &bytes {
-        let frame = framing.encode(byte);
+    for slot in &slots {
+        let frame = slot.map_or(0x7FF, |byte| framing.encode(byte));
         line.extend((0..11).map(|k| frame >> k & 1 == 1));
     }
     assert_eq!(line.len(), bits_total);
@@ -116,9 +122,19 @@ fn bit_errors(data: &[u8]) {
         line[f] = !line[f];
     }
     let mut allow: [u128; R] = core::array::from_fn(|i| 1 | 1 << a[i] | 1 << b[i]);
+    for n in 0..total {
+        let place = n % SEQ;
+        if place >= 2 {
+            let start = 3 + 11 * n;
+            let from = if place == 2 { start - 11 } else { start };
+            if flipped.len() == 2 && flipped.iter().all(|f| (from..start + 11).contains(f)) {
+                allow[place - 2] = u128::MAX;
+            }
+        }
+    }
     let mut panel: Panel<R> = Panel::new();
     let mut rx = BitReceiver::new(framing);
-    let check = |panel: &Panel<R>, allow: &[u128; R]| {
+    let check = |panel: &Panel<R>| {
         for (i, &v) in panel.registers().iter().enumerate() {
             assert!(
                 v <= MAX_VALUE && allow[i] >> v & 1 == 1,
@@ -126,40 +142,25 @@ fn bit_errors(data: &[u8]) {
             );
         }
     };
-    for (n, _) in bytes.iter().enumerate() {
+    for (n, slot) in slots.iter().enumerate() {
         let from = 3 + 11 * n;
         if bit_level {
             for k in from..from + 11 {
                 if let Some(got) = rx.bit(line[k]) {
-                    let aligned = (k + 1 - 3) % 11 == 0;
-                    let hit = flipped.iter().any(|f| (k + 1 - 11..=k).contains(f));
-                    if let (Ok(w), true, true) = (got, aligned, hit) {
-                        if w <= MAX_VALUE && n % SEQ > 0 {
-                            allow[n % SEQ - 1] |= 1 << w;
-                        }
-                    }
                     panel.receive(got);
-                    check(&panel, &allow);
+                    check(&panel);
                 }
             }
-        } else {
+        } else if slot.is_some() {
+            // Frames read in sync: the idle byte time carries no frame.
             let frame = (0..11).fold(0u16, |f, k| f | u16::from(line[from + k]) << k);
-            let got = framing.decode(frame);
-            if let Ok(w) = got {
-                if w <= MAX_VALUE && n % SEQ > 0 && w != bytes[n] {
-                    allow[n % SEQ - 1] |= 1 << w;
-                }
-            }
-            panel.receive(got);
-            check(&panel, &allow);
+            panel.receive(framing.decode(frame));
+            check(&panel);
         }
     }
-    if !bit_level {
-        // The flips lie in the first three sequences: the sixth is clean, and so are the resets
-        // on both sides of the fifth.
-        assert_eq!(bytes[4 * SEQ], RESET);
-        assert_eq!(panel.registers(), &b, "flipped {flipped:?}");
-    }
+    // The flips lie in the first three sequences: the display is `b` by the end of the sixth.
+    assert_eq!(slots[5 * SEQ], Some(RESET));
+    assert_eq!(panel.registers(), &b, "flipped {flipped:?}, bit level {bit_level}");
 }
 
 fuzz_target!(|data: &[u8]| {
