@@ -505,3 +505,214 @@ proptest! {
         prop_assert!(d.cycles.is_empty());
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Issue 19: the whole class of 1- and 2-bit errors at the level of the byte machines.
+
+type Run = (u8, u8, u8, Option<u32>);
+
+/// The crate's read lines name the crate, the station and the subaddress: a reply that carries
+/// another crate's or another cycle's data can never look right.
+#[derive(Default, Clone)]
+struct Crate {
+    address: u8,
+    cycles: Vec<Run>,
+}
+
+impl Dataway for Crate {
+    fn cycle(&mut self, n: u8, a: u8, f: u8, write: Option<u32>) -> Cycle {
+        self.cycles.push((n, a, f, write));
+        Cycle {
+            read: read_value(self.address, n, a),
+            x: true,
+            q: f % 2 == 0,
+        }
+    }
+}
+
+fn read_value(address: u8, n: u8, a: u8) -> u32 {
+    (u32::from(address) << 12 | u32::from(n) << 4 | u32::from(a)) ^ 0x5A_0000
+}
+
+fn cmd(crate_address: u8, station: u8, subaddress: u8, function: u8, data: Option<u32>) -> Message {
+    Message::Command {
+        crate_address,
+        station,
+        subaddress,
+        function,
+        data,
+    }
+}
+
+/// A write whose data defeats a check made at the layout a damaged SF declares: F16 → F0 by
+/// flipping F's bit 5 and the parity bit makes d1 the SUM, and d1 is chosen so the column sum
+/// then cancels; d2, d3, d4 are 0x3F, i.e. exactly SPACE.
+fn write_that_defeats_a_moved_sum(crate_address: u8, station: u8, subaddress: u8) -> Message {
+    let d1 = (crate_address ^ subaddress ^ (0x20 | station)) & 0x3F;
+    let data = u32::from(d1) << 18 | 0x3_FFFF;
+    cmd(crate_address, station, subaddress, 16, Some(data))
+}
+
+/// Commands of every shape, with the fields that make the checks weakest: the issue's example,
+/// writes, reads, other functions, the crate-32 header (0x20 ^ 0xC0 is exactly WAIT), station 0
+/// (SN 0x20), data bytes 0x20 and 0x3F, a write whose data defeats a moved SUM.
+fn command_shapes() -> Vec<Message> {
+    vec![
+        cmd(47, 3, 0, 16, Some(0x8994D)),
+        write_that_defeats_a_moved_sum(9, 5, 1),
+        cmd(5, 2, 3, 0, None),
+        cmd(62, 31, 15, 9, None),
+        cmd(32, 0, 0, 17, Some(0x82_0820)),
+        cmd(1, 0, 0, 0, None),
+        cmd(33, 7, 8, 26, None),
+        cmd(16, 1, 2, 23, Some(0xFF_FFFF)),
+        cmd(21, 16, 0, 7, None),
+        cmd(40, 12, 4, 24, None),
+    ]
+}
+
+fn with_flips(bytes: &[u8], flips: &[usize]) -> Vec<u8> {
+    flip(bytes, flips)
+}
+
+/// Every single bit of `0..bits`, and every pair of bits with at least one in `0..first`.
+fn one_and_two_bit_errors(first: usize, bits: usize) -> Vec<Vec<usize>> {
+    let mut out = Vec::new();
+    for i in 0..bits {
+        out.push(vec![i]);
+        for j in i + 1..bits {
+            if i < first {
+                out.push(vec![i, j]);
+            }
+        }
+    }
+    out
+}
+
+/// A controller for every crate address 1..=62, fresh, each with its (empty) crate.
+fn fresh_controllers() -> Vec<(Controller, Crate)> {
+    (1..=62u8)
+        .map(|address| {
+            let c = Controller::new(ControllerConfig {
+                address,
+                demand_repeat: 0,
+            })
+            .unwrap();
+            (
+                c,
+                Crate {
+                    address,
+                    cycles: Vec::new(),
+                },
+            )
+        })
+        .collect()
+}
+
+/// The clean control command each crate gets after the damaged stream, to show it recovered.
+fn probe(address: u8) -> Message {
+    cmd(address, 4, 5, 9, None)
+}
+
+/// Feeds `stream` to a fresh controller for every crate address 1..=62, each on its own — as if
+/// the damage happened on the link right before it — then two WAIT and a clean command to that
+/// crate. Checks that each ran nothing but `allowed` (each at most once) and then the clean
+/// command (it resynchronised by itself). `fresh` and `probes` are reused between calls.
+fn every_controller_runs_only(
+    fresh: &[(Controller, Crate)],
+    probes: &[Vec<u8>],
+    stream: &[u8],
+    allowed: &[Message],
+    what: &dyn Fn() -> String,
+) {
+    for ((controller, crate_), probe_bytes) in fresh.iter().zip(probes) {
+        let (mut c, mut d) = (controller.clone(), crate_.clone());
+        let address = d.address;
+        for &b in stream {
+            c.clock(b, &mut d);
+        }
+        for (k, cycle) in d.cycles.iter().enumerate() {
+            let ok = allowed
+                .iter()
+                .any(|m| m.crate_address() == address && fields(m) == *cycle);
+            assert!(
+                ok && !d.cycles[..k].contains(cycle),
+                "{}: crate {address} ran {cycle:?} (allowed {allowed:?})",
+                what()
+            );
+        }
+        let before = d.cycles.len();
+        for &b in probe_bytes {
+            c.clock(b, &mut d);
+        }
+        assert!(
+            d.cycles[before..] == [fields(&probe(address))],
+            "{}: crate {address} did not recover",
+            what()
+        );
+    }
+}
+
+fn probes() -> Vec<Vec<u8>> {
+    (1..=62u8)
+        .map(|a| {
+            let mut p = vec![WAIT, WAIT];
+            p.extend(encode(&probe(a)));
+            p.extend([WAIT; 2]);
+            p
+        })
+        .collect()
+}
+
+/// Sweeps every 1-bit error and every 2-bit error with a bit in `m` over the stream
+/// WAIT, `m`, WAIT, the first two bytes of the next command (errors that reach across the gap),
+/// feeding each damaged stream to every controller on its own. Returns the cases checked.
+fn sweep_command(m: Message) -> u64 {
+    let fresh = fresh_controllers();
+    let probes = probes();
+    let next = cmd(m.crate_address() % 62 + 1, 1, 2, 9, None);
+    let cmd_bytes = encode(&m);
+    let next_bytes = encode(&next);
+    let mut stream = vec![WAIT];
+    stream.extend(&cmd_bytes);
+    stream.push(WAIT);
+    stream.extend(&next_bytes[..2]);
+    let head = stream.len();
+    stream.extend(&next_bytes[2..]);
+    stream.extend([WAIT; 2]);
+    let mut cases = 0;
+    for bits in one_and_two_bit_errors((1 + cmd_bytes.len()) * 8, head * 8) {
+        let s = with_flips(&stream, &bits);
+        every_controller_runs_only(&fresh, &probes, &s, &[m, next], &|| {
+            format!("{m:?} bits {bits:?}")
+        });
+        cases += 1;
+    }
+    cases
+}
+
+/// Item 1: no 1- or 2-bit error anywhere in a command — nor in the gap after it, nor across into
+/// the next message — makes any crate controller run a cycle other than the one sent.
+/// Writes here, every other function in the next test (two tests: they run in parallel).
+#[test]
+fn no_one_or_two_bit_error_in_a_write_runs_any_other_cycle() {
+    let shapes: Vec<Message> = command_shapes()
+        .into_iter()
+        .filter(|m| fields(m).3.is_some())
+        .collect();
+    assert_eq!(shapes.len(), 4);
+    let cases: u64 = shapes.into_iter().map(sweep_command).sum();
+    assert!(cases > 30_000, "{cases}");
+}
+
+/// Item 1 for reads and every other function that is not a write.
+#[test]
+fn no_one_or_two_bit_error_in_a_non_write_runs_any_other_cycle() {
+    let shapes: Vec<Message> = command_shapes()
+        .into_iter()
+        .filter(|m| fields(m).3.is_none())
+        .collect();
+    assert_eq!(shapes.len(), 6);
+    let cases: u64 = shapes.into_iter().map(sweep_command).sum();
+    assert!(cases > 30_000, "{cases}");
+}

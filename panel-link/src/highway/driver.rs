@@ -5,8 +5,8 @@ use core::fmt;
 use heapless::Vec;
 
 use super::{
-    DecodeError, EncodeError, MAX_DECODE, MAX_MESSAGE, Message, NON_ADDRESSED, Status, WAIT,
-    decode, is_clean_delimiter, is_read,
+    DecodeError, EncodeError, Framer, MAX_DECODE, MAX_MESSAGE, Message, NON_ADDRESSED, Seen,
+    Status, WAIT, decode, is_read,
 };
 
 /// How a [`Driver`] works the loop.
@@ -220,7 +220,9 @@ pub struct Driver<const W: usize> {
     gap_left: u8,
     rx: [u8; MAX_DECODE],
     rx_len: usize,
-    rx_overflow: bool,
+    framer: Framer,
+    /// In junk already counted as garbled.
+    junk: bool,
     next_tag: u32,
     stats: DriverStats,
 }
@@ -239,7 +241,8 @@ impl<const W: usize> Driver<W> {
             gap_left: 0,
             rx: [WAIT; MAX_DECODE],
             rx_len: 0,
-            rx_overflow: false,
+            framer: Framer::new(),
+            junk: false,
             next_tag: 0,
             stats: DriverStats {
                 sent: 0,
@@ -361,27 +364,32 @@ impl<const W: usize> Driver<W> {
     }
 
     fn receive(&mut self, input: u8) -> Option<DriverEvent> {
-        let clean_delimiter = is_clean_delimiter(input);
-        if self.rx_len == 0 && clean_delimiter {
-            return None; // gap
+        // Message boundaries as every crate controller follows them: a message ends only with a
+        // clean delimiter where its layout allows an end; after a break the stream is junk up
+        // to the next clean delimiter, so a damaged message's tail is never taken for a reply.
+        let seen = self.framer.push(input);
+        if seen == Seen::Junk {
+            if !self.junk {
+                self.junk = true;
+                self.stats.garbled = self.stats.garbled.saturating_add(1);
+            }
+            self.rx_len = 0;
+            return None;
         }
-        match self.rx.get_mut(self.rx_len) {
-            Some(slot) => *slot = input,
-            None => self.rx_overflow = true,
+        self.junk = false;
+        match seen {
+            Seen::Gap | Seen::Junk => return None,
+            Seen::Header => self.rx_len = 0,
+            Seen::Text | Seen::End => {}
         }
-        if !self.rx_overflow {
+        if let Some(slot) = self.rx.get_mut(self.rx_len) {
+            *slot = input;
             self.rx_len = self.rx_len.saturating_add(1);
         }
-        // Only a clean delimiter ends a message: a damaged one is kept in, so the rest of a
-        // message can never be taken for a message of its own.
-        if !clean_delimiter {
+        if seen != Seen::End {
             return None;
         }
         let len = core::mem::take(&mut self.rx_len);
-        if core::mem::take(&mut self.rx_overflow) {
-            self.stats.garbled = self.stats.garbled.saturating_add(1);
-            return None;
-        }
         let bytes = self.rx.get(..len).unwrap_or(&[]);
         match decode(bytes) {
             Ok(Message::Reply {
