@@ -113,11 +113,17 @@ enum Rx {
 /// Each [`clock`](Self::clock) takes the byte arriving from upstream and returns the byte for
 /// downstream, one byte late. A command with this crate's address is taken off the loop: the
 /// controller answers the short reply (header + END) at once, puts WAIT in place of the rest of
-/// the command text, checks row parity, layout and the column sum, runs the dataway cycle only if
-/// all are clean, and writes its reply (header, status with ERR/SX/SQ/DERR, data for reads,
-/// ENDSUM) over the SPACE bytes. Between messages it may send a demand (header, SGL, ENDSUM),
-/// holding up to 3 bytes of a following message meanwhile; the WAIT bytes of the next gap give the
-/// time back.
+/// the command text, checks row parity, layout, the column sum and that every byte after SUM up
+/// to the reply's status byte is SPACE (the guard, see the [module docs](super)), runs the
+/// dataway cycle only if all are clean, and writes its reply (header, status with ERR/SX/SQ/DERR,
+/// data for reads, ENDSUM) over the reply room. Between messages it may send a demand (header,
+/// SGL, ENDSUM), holding up to 3 bytes of a following message meanwhile; the WAIT bytes of the
+/// next gap give the time back.
+///
+/// It follows every message's layout, its own and those it passes on: a delimiter where the
+/// layout allows no end is a break, and everything up to the next clean delimiter is junk —
+/// passed on unread, or, in a command for this crate, replaced by WAIT (no reply, DERR in the
+/// next one). So the tail of a damaged message is never read as a command.
 ///
 /// ```
 /// use regler_panel_link::highway::{decode, Controller, ControllerConfig, Cycle, Dataway, Message, Status, MAX_MESSAGE};

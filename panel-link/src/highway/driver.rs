@@ -15,7 +15,8 @@ use super::{
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct DriverConfig {
     /// Byte clocks after a command's last byte before it counts as lost. Make it longer than the
-    /// loop's round trip (controllers × 4 bytes of delay at most, plus two messages), so a reply
+    /// loop's round trip (controllers × 4 bytes of delay at most, plus two messages of at most
+    /// [`MAX_MESSAGE`] bytes and the gap), so a reply
     /// can never arrive after its command was given up or sent again.
     pub timeout: u32,
     /// How many times a command is sent again before it fails. A resend waits for the attempt's
@@ -188,7 +189,10 @@ struct Slot {
 ///
 /// [`submit`](Self::submit) queues a command and gives it a tag; every [`clock`](Self::clock)
 /// takes the byte arriving from the last crate and gives the byte to send, and at most one
-/// [`DriverEvent`]. A reply is matched to the command outstanding for its crate; a reply with ERR,
+/// [`DriverEvent`]. It follows message boundaries as the crate controllers do (a delimiter where
+/// the layout allows no end makes junk up to the next clean delimiter), and completes a command
+/// only with a reply whose every byte passed the checks, whose header names that command's crate
+/// and whose length is the one that command's function asks for. A reply with ERR,
 /// a command that came back unanswered and a time-out send the command again, up to
 /// [`DriverConfig::retries`] times. Execution is at least once: a reply lost on the way back
 /// means the command runs again (the highway has no sequence numbers), so a non-idempotent
