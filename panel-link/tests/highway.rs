@@ -1036,3 +1036,99 @@ fn three_bit_errors_in_replies_complete_no_wrong_command_sampled() {
         });
     }
 }
+
+/// Items 1 and 2 on a whole loop: a driver and a controller at every address 1..=62, each link
+/// clean but for a 2-bit error now and then (the two bits in one byte — a text byte may become a
+/// clean delimiter — or in two bytes up to 3 apart) on a random link at a random moment. No crate
+/// ever runs a cycle but the command outstanding for it, no completion carries a reply that crate
+/// did not send for that command, and every command ends.
+#[test]
+fn a_loop_of_62_crates_under_two_bit_errors_never_lies() {
+    let mut loop_: Vec<(Controller, Crate)> = fresh_controllers();
+    let mut driver: Driver<8> = Driver::new(DriverConfig {
+        timeout: 4 * 63 + 64,
+        retries: 8,
+        gap: 1,
+    });
+    let mut rng = Noise::new(0.0, 47).unwrap();
+    let mut pending: Vec<Option<Message>> = vec![None; 63];
+    // Per link, bits still to flip: (clocks from now, mask).
+    let mut hits: Vec<Vec<(u32, u8)>> = vec![Vec::new(); 63];
+    let mut line = WAIT;
+    let (mut completed, mut failed, mut errors) = (0u64, 0u64, 0u64);
+    for clock in 0..120_000u32 {
+        if driver.outstanding() < 8 {
+            let m = random_command(&mut rng);
+            let c = m.crate_address();
+            if !driver.busy(c) {
+                driver.submit(m).unwrap();
+                pending[usize::from(c)] = Some(m);
+                loop_[usize::from(c) - 1].1.cycles.clear();
+            }
+        }
+        if clock % 40 == 0 {
+            let r = rng.next_u64();
+            let link = (r % 63) as usize;
+            let (b1, b2) = ((r >> 8) as u8 % 8, (r >> 16) as u8 % 8);
+            if r >> 24 & 1 == 0 && b1 != b2 {
+                hits[link].push((0, 1 << b1 | 1 << b2));
+            } else {
+                hits[link].push((0, 1 << b1));
+                hits[link].push(((r >> 32) as u32 % 3 + 1, 1 << b2));
+            }
+            errors += 1;
+        }
+        let mut corrupt = |link: usize, byte: u8| -> u8 {
+            let mut out = byte;
+            hits[link].retain_mut(|(wait, mask)| {
+                if *wait == 0 {
+                    out ^= *mask;
+                    false
+                } else {
+                    *wait -= 1;
+                    true
+                }
+            });
+            out
+        };
+        let step = driver.clock(line);
+        let mut byte = step.transmit;
+        for (k, (controller, crate_)) in loop_.iter_mut().enumerate() {
+            let before = crate_.cycles.len();
+            byte = controller.clock(corrupt(k, byte), crate_);
+            let address = usize::from(crate_.address);
+            for cycle in &crate_.cycles[before..] {
+                let m = pending[address]
+                    .unwrap_or_else(|| panic!("crate {address} ran {cycle:?} with nothing sent"));
+                assert_eq!(*cycle, fields(&m), "crate {address} ran another cycle");
+            }
+        }
+        line = corrupt(62, byte);
+        match step.event {
+            Some(DriverEvent::Completed(done)) => {
+                let c = done.command.crate_address();
+                assert_eq!(pending[usize::from(c)], Some(done.command));
+                let crate_ = &loop_[usize::from(c) - 1].1;
+                assert!(!crate_.cycles.is_empty(), "completed without running");
+                let (n, a, f, _) = fields(&done.command);
+                let data = (f <= 7).then(|| read_value(c, n, a));
+                assert_eq!(done.data, data, "a wrong answer accepted");
+                assert!(done.status.x && done.status.q == f.is_multiple_of(2));
+                pending[usize::from(c)] = None;
+                completed += 1;
+            }
+            Some(DriverEvent::Failed { command, .. }) => {
+                pending[usize::from(command.crate_address())] = None;
+                failed += 1;
+            }
+            _ => {}
+        }
+    }
+    let stats = *driver.stats();
+    assert!(
+        errors > 2_000 && stats.garbled > 500,
+        "{errors} errors, {stats:?}"
+    );
+    assert!(completed > 2_000, "{completed} completed, {stats:?}");
+    assert!(failed * 100 < completed, "{failed} failed of {completed}");
+}
