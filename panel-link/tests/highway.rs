@@ -1,6 +1,9 @@
-//! Serial-highway evidence: every 1-, 2- and 3-bit error is rejected (exhaustively), round trips
-//! of every message kind, decode never panics on any bytes, and the crate controller runs
-//! exactly the command that was sent or nothing, and always recovers.
+//! Serial-highway evidence: `decode` rejects every 1-, 2- and 3-bit error (exhaustively), round
+//! trips of every message kind, decode never panics on any bytes; at the byte machines, no 1- or
+//! 2-bit error in a command (exhaustive over ten shapes, every controller address) makes any crate
+//! controller run a cycle other than the one sent, none in a reply, WAIT or demand makes the
+//! driver complete a command with a reply never sent (exhaustive over twelve segments), 3-bit
+//! errors sampled for both, and every machine recovers by itself.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -618,7 +621,10 @@ fn probe(address: u8) -> Message {
 
 /// Feeds `stream` to a fresh controller for every crate address 1..=62, each on its own — as if
 /// the damage happened on the link right before it — then two WAIT and a clean command to that
-/// crate. Checks that each ran nothing but `allowed` (each at most once) and then the clean
+/// crate. That covers the loop: controllers upstream of the damaged link see clean bytes; a
+/// controller that passes bytes on changes none, so every controller downstream sees the same
+/// damaged bytes, one byte later — unless one takes the message off the loop, and then it sends
+/// on only its own clean reply and WAIT (checked by the reply sweeps below). Checks that each ran nothing but `allowed` (each at most once) and then the clean
 /// command (it resynchronised by itself). `fresh` and `probes` are reused between calls.
 fn every_controller_runs_only(
     fresh: &[(Controller, Crate)],
