@@ -107,6 +107,10 @@ pub fn write_byte<P: Write>(port: &mut P, byte: u8) -> Result<(), IoError<P::Err
 /// One byte clock of a crate controller: read the byte from upstream, write the byte for
 /// downstream.
 ///
+/// A controller gives no events: when the write fails, the byte it meant to send is lost like a
+/// byte on a noisy line (a reply byte lost makes the driver retry; the controller's counters
+/// still record the command).
+///
 /// # Errors
 /// See [`read_byte`] and [`write_byte`].
 pub fn clock_controller<P: Read + Write, D: Dataway + ?Sized>(
@@ -118,20 +122,52 @@ pub fn clock_controller<P: Read + Write, D: Dataway + ?Sized>(
     write_byte(port, controller.clock(input, dataway))
 }
 
+/// A port error in [`clock_driver`], with the event the driver gave at that clock.
+///
+/// The driver has already taken its byte clock when the port fails — a command may have
+/// completed, its dataway cycle run — so the event is handed back here, never lost. The byte the
+/// driver meant to send (or the one it should have received) is lost like a byte on a noisy line:
+/// the command it belonged to is retried at its deadline.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct DriverClockError<E> {
+    /// What went wrong on the port.
+    pub error: IoError<E>,
+    /// The event of this clock, if it produced one.
+    pub event: Option<DriverEvent>,
+}
+
+impl<E: fmt::Debug> fmt::Display for DriverClockError<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(&self.error, f)?;
+        if self.event.is_some() {
+            f.write_str(" (the driver's event of that clock is handed back with the error)")?;
+        }
+        Ok(())
+    }
+}
+
+impl<E: fmt::Debug> core::error::Error for DriverClockError<E> {}
+
 /// One byte clock of the driver in lock-step with the loop: `input` is the byte that came back
 /// last clock; the driver's byte is written, and the byte that comes back replaces `input`.
 ///
 /// # Errors
-/// See [`read_byte`] and [`write_byte`].
+/// See [`read_byte`] and [`write_byte`]; the error carries the event the driver gave at this
+/// clock ([`DriverClockError::event`]), so nothing the driver accepted is lost.
 pub fn clock_driver<P: Read + Write, const W: usize>(
     port: &mut P,
     driver: &mut Driver<W>,
     input: &mut u8,
-) -> Result<Option<DriverEvent>, IoError<P::Error>> {
+) -> Result<Option<DriverEvent>, DriverClockError<P::Error>> {
     let step = driver.clock(*input);
-    write_byte(port, step.transmit)?;
-    port.flush().map_err(IoError::Port)?;
-    *input = read_byte(port)?;
+    let with_event = |error| DriverClockError {
+        error,
+        event: step.event,
+    };
+    write_byte(port, step.transmit).map_err(with_event)?;
+    port.flush().map_err(|e| with_event(IoError::Port(e)))?;
+    *input = read_byte(port).map_err(with_event)?;
     Ok(step.event)
 }
 
@@ -161,4 +197,143 @@ pub fn panel_receive<P: Read, const R: usize>(
     let byte = read_byte(port)?;
     panel.receive(Ok(byte));
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::highway::{
+        Controller, ControllerConfig, Cycle, Dataway, DriverConfig, Message, Status,
+    };
+
+    /// A port in a loop with one crate controller: what the driver writes goes through the
+    /// controller and comes back on the next read. Its writes fail from clock `fail_from` on.
+    struct LoopPort {
+        controller: Controller,
+        back: u8,
+        writes: u32,
+        fail_from: u32,
+    }
+
+    struct Register;
+    impl Dataway for Register {
+        fn cycle(&mut self, _: u8, _: u8, _: u8, _: Option<u32>) -> Cycle {
+            Cycle {
+                read: 0x12_3456,
+                x: true,
+                q: true,
+            }
+        }
+    }
+
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    struct Broken;
+    impl fmt::Display for Broken {
+        fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            f.write_str("broken")
+        }
+    }
+    impl core::error::Error for Broken {}
+    impl embedded_io::Error for Broken {
+        fn kind(&self) -> embedded_io::ErrorKind {
+            embedded_io::ErrorKind::Other
+        }
+    }
+    impl embedded_io::ErrorType for LoopPort {
+        type Error = Broken;
+    }
+    impl Read for LoopPort {
+        fn read(&mut self, buf: &mut [u8]) -> Result<usize, Broken> {
+            match buf.first_mut() {
+                Some(b) => {
+                    *b = self.back;
+                    Ok(1)
+                }
+                None => Ok(0),
+            }
+        }
+    }
+    impl Write for LoopPort {
+        fn write(&mut self, buf: &[u8]) -> Result<usize, Broken> {
+            self.writes = self.writes.saturating_add(1);
+            if self.writes > self.fail_from {
+                return Err(Broken);
+            }
+            if let Some(&b) = buf.first() {
+                self.back = self.controller.clock(b, &mut Register);
+            }
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> Result<(), Broken> {
+            Ok(())
+        }
+    }
+
+    /// Item 3 of issue 19: for every clock at which the port's write can fail — in particular
+    /// the one that produces `Completed` — the event the driver gave is returned, with the error
+    /// or without it: over the whole run, the command completes exactly once.
+    #[test]
+    fn no_driver_event_is_lost_when_the_port_fails() {
+        let read = Message::Command {
+            crate_address: 4,
+            station: 1,
+            subaddress: 0,
+            function: 0,
+            data: None,
+        };
+        let run = |fail_from: u32| {
+            let mut port = LoopPort {
+                controller: Controller::new(ControllerConfig {
+                    address: 4,
+                    demand_repeat: 0,
+                })
+                .unwrap(),
+                back: crate::highway::WAIT,
+                writes: 0,
+                fail_from,
+            };
+            let mut driver: Driver<1> = Driver::new(DriverConfig::default());
+            driver.submit(read).unwrap();
+            let mut input = crate::highway::WAIT;
+            let mut completed = std::vec::Vec::new();
+            for clock in 0..100u32 {
+                let event = match clock_driver(&mut port, &mut driver, &mut input) {
+                    Ok(event) => event,
+                    Err(e) => {
+                        assert_eq!(e.error, IoError::Port(Broken));
+                        assert!(e.to_string().contains("serial port error"));
+                        e.event
+                    }
+                };
+                if let Some(DriverEvent::Completed(done)) = event {
+                    completed.push((clock, done));
+                }
+                if clock >= fail_from {
+                    break; // the application stops at the error
+                }
+            }
+            completed
+        };
+        let clean = run(u32::MAX);
+        assert_eq!(clean.len(), 1);
+        let (done_at, done) = clean[0];
+        assert_eq!(done.data, Some(0x12_3456));
+        assert_eq!(
+            done.status,
+            Status {
+                x: true,
+                q: true,
+                ..Status::default()
+            }
+        );
+        for fail_from in 0..done_at + 5 {
+            let completed = run(fail_from);
+            let expected = if fail_from >= done_at { 1 } else { 0 };
+            assert_eq!(
+                completed.len(),
+                expected,
+                "write failing at clock {fail_from}, completion at {done_at}"
+            );
+        }
+    }
 }

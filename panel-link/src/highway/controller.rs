@@ -5,8 +5,9 @@ use core::fmt;
 use heapless::Deque;
 
 use super::{
-    COLUMNS, END, M1, M2, NON_ADDRESSED, SPACE, STATION_MARK, WAIT, data_bytes, endsum_byte,
-    is_clean_delimiter, is_delimiter, is_read, is_write, row_parity_ok, with_parity,
+    COLUMNS, END, Framer, M1, M2, NON_ADDRESSED, SPACE, STATION_MARK, Seen, WAIT, data_bytes,
+    endsum_byte, guard_len, is_clean_delimiter, is_delimiter, is_read, is_write, row_parity_ok,
+    with_parity,
 };
 
 /// What a CAMAC dataway cycle answered.
@@ -96,14 +97,15 @@ pub struct ControllerStats {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 enum Rx {
-    /// Between messages: delimiters are gap filler.
-    Between,
-    /// A header arrived; the second byte tells the type.
+    /// Following message boundaries: between messages, passing others' messages on, or junk.
+    Framing,
+    /// A header with our address arrived; the second byte tells whether a command for us begins.
     Second { header: u8 },
-    /// Passing a message for someone else on, until its delimiter.
-    Passing,
     /// Taking a command addressed to this crate.
     Command,
+    /// Our command broke (a delimiter where its layout allows none): its bytes up to the next
+    /// clean delimiter are taken off the loop too, so no crate downstream sees its tail.
+    Consume,
 }
 
 /// The L-type crate controller as a byte machine on the loop.
@@ -111,11 +113,17 @@ enum Rx {
 /// Each [`clock`](Self::clock) takes the byte arriving from upstream and returns the byte for
 /// downstream, one byte late. A command with this crate's address is taken off the loop: the
 /// controller answers the short reply (header + END) at once, puts WAIT in place of the rest of
-/// the command text, checks row parity, layout and the column sum, runs the dataway cycle only if
-/// all are clean, and writes its reply (header, status with ERR/SX/SQ/DERR, data for reads,
-/// ENDSUM) over the SPACE bytes. Between messages it may send a demand (header, SGL, ENDSUM),
-/// holding up to 3 bytes of a following message meanwhile; the WAIT bytes of the next gap give the
-/// time back.
+/// the command text, checks row parity, layout, the column sum and that every byte after SUM up
+/// to the reply's status byte is SPACE (the guard, see the [module docs](super)), runs the
+/// dataway cycle only if all are clean, and writes its reply (header, status with ERR/SX/SQ/DERR,
+/// data for reads, ENDSUM) over the reply room. Between messages it may send a demand (header,
+/// SGL, ENDSUM), holding up to 3 bytes of a following message meanwhile; the WAIT bytes of the
+/// next gap give the time back.
+///
+/// It follows every message's layout, its own and those it passes on: a delimiter where the
+/// layout allows no end is a break, and everything up to the next clean delimiter is junk —
+/// passed on unread, or, in a command for this crate, replaced by WAIT (no reply, DERR in the
+/// next one). So the tail of a damaged message is never read as a command.
 ///
 /// ```
 /// use regler_panel_link::highway::{decode, Controller, ControllerConfig, Cycle, Dataway, Message, Status, MAX_MESSAGE};
@@ -148,6 +156,7 @@ pub struct Controller {
     /// Up to 3 bytes held behind a demand.
     held: Deque<u8, 3>,
     rx: Rx,
+    framer: Framer,
     // The addressed command being taken.
     pos: u8,
     columns: u8,
@@ -157,8 +166,10 @@ pub struct Controller {
     station: u8,
     data: u32,
     sum_at: u8,
+    /// Where the reply's header goes (the first byte of the reply room).
+    room_at: u8,
     reply: [u8; 7],
-    /// The reply's length once the command is answered (at its first SPACE); 0 before.
+    /// The reply's length once the command is answered (at the reply's status byte); 0 before.
     reply_len: u8,
     reply_sent: u8,
     /// The last command had an error (reported as DERR in the next reply).
@@ -182,7 +193,8 @@ impl Controller {
             config,
             delayed: WAIT,
             held: Deque::new(),
-            rx: Rx::Between,
+            rx: Rx::Framing,
+            framer: Framer::new(),
             pos: 0,
             columns: 0,
             error: false,
@@ -191,6 +203,7 @@ impl Controller {
             station: 0,
             data: 0,
             sum_at: 0,
+            room_at: 0,
             reply: [WAIT; 7],
             reply_len: 0,
             reply_sent: 0,
@@ -242,7 +255,7 @@ impl Controller {
             return out;
         }
         self.delayed = byte;
-        if self.rx == Rx::Between {
+        if self.rx == Rx::Framing && self.framer.between() {
             if let Some(sgl) = self.demand_due(dataway) {
                 let header = with_parity(self.config.address);
                 let sgl_byte = with_parity(M2 | sgl);
@@ -282,47 +295,42 @@ impl Controller {
     /// Decides the byte that goes out in the place of `input`; `None` for gap filler.
     fn take<D: Dataway + ?Sized>(&mut self, input: u8, dataway: &mut D) -> Option<u8> {
         match self.rx {
-            Rx::Between => {
-                if is_clean_delimiter(input) {
+            Rx::Framing => {
+                let seen = self.framer.push(input);
+                if seen == Seen::Gap {
                     return None;
                 }
-                // A damaged delimiter is not trusted as a gap, nor as a header: what follows is
-                // passed on as junk up to the next clean delimiter, so the rest of a message can
-                // never be taken for a new one.
-                self.rx = if is_delimiter(input) {
-                    Rx::Passing
-                } else {
-                    Rx::Second { header: input }
-                };
+                if seen == Seen::Header {
+                    if row_parity_ok(input) && input & COLUMNS == self.config.address {
+                        self.rx = Rx::Second { header: input };
+                    } else {
+                        self.stats.passed = self.stats.passed.saturating_add(1);
+                    }
+                }
                 Some(input)
             }
             Rx::Second { header } => {
-                if is_clean_delimiter(input) {
-                    // Header + END: a truncated command is answered at once by passing it on —
-                    // it is itself the short reply.
-                    self.rx = Rx::Between;
-                    return Some(input);
-                }
-                let ours = row_parity_ok(header) && header & COLUMNS == self.config.address;
+                self.rx = Rx::Framing;
                 // A reply or demand with our header cannot be for us: only commands are. A
                 // damaged second byte of a command to us makes an ERR reply.
                 let command = !row_parity_ok(input) || input & (M1 | M2) == 0;
-                if ours && command && !is_delimiter(input) {
+                if command && !is_delimiter(input) {
                     self.start_command(header, input);
-                    Some(END)
-                } else {
-                    self.rx = Rx::Passing;
-                    self.stats.passed = self.stats.passed.saturating_add(1);
-                    Some(input)
+                    return Some(END);
                 }
-            }
-            Rx::Passing => {
-                if is_clean_delimiter(input) {
-                    self.rx = Rx::Between;
-                }
+                // Header + END (the short reply), or not a command: followed like any message.
+                self.stats.passed = self.stats.passed.saturating_add(1);
+                self.framer.push(input);
                 Some(input)
             }
             Rx::Command => Some(self.command_byte(input, dataway)),
+            Rx::Consume => {
+                if is_clean_delimiter(input) {
+                    self.rx = Rx::Framing;
+                    self.framer.reset();
+                }
+                Some(WAIT)
+            }
         }
     }
 
@@ -337,29 +345,40 @@ impl Controller {
         self.station = 0;
         self.data = 0;
         self.sum_at = 4;
+        self.room_at = u8::MAX;
         self.reply_len = 0;
         self.reply_sent = 0;
+    }
+
+    /// The command broke: no reply (or the rest of it) can be placed; the rest of the command is
+    /// taken off the loop up to the next clean delimiter.
+    fn break_command(&mut self) -> u8 {
+        if self.reply_len == 0 {
+            self.stats.truncated = self.stats.truncated.saturating_add(1);
+        }
+        self.last_error = true;
+        // The delimiter that broke it is not the end: the junk runs to the next clean one.
+        self.rx = Rx::Consume;
+        WAIT
     }
 
     fn command_byte<D: Dataway + ?Sized>(&mut self, input: u8, dataway: &mut D) -> u8 {
         let pos = self.pos;
         self.pos = self.pos.saturating_add(1);
+        let answered = self.reply_len != 0;
         if is_clean_delimiter(input) {
-            // END: the command is over (early, if no reply was written yet).
-            self.rx = Rx::Between;
-            if self.reply_len == 0 {
-                self.stats.truncated = self.stats.truncated.saturating_add(1);
-                self.last_error = true;
+            // END ends the command only once the whole reply went out over the SPACE bytes;
+            // anywhere else a clean delimiter is a break: the bytes after it are this damaged
+            // command's tail, never a message of their own.
+            if answered && self.reply_sent >= self.reply_len && input == END {
+                self.rx = Rx::Framing;
+                self.framer.reset();
+                return END;
             }
-            return END;
+            return self.break_command();
         }
-        if is_delimiter(input) {
-            // A damaged delimiter: an error in the command, not its end.
-            self.error = true;
-        }
-        if self.reply_len != 0 {
-            // Answered (the reply has a length): the rest of the reply, then WAIT for any
-            // SPACE beyond it.
+        if answered {
+            // The rest of the reply, then WAIT for any SPACE beyond it.
             if self.reply_sent < self.reply_len {
                 let byte = self
                     .reply
@@ -370,6 +389,10 @@ impl Controller {
                 return byte;
             }
             return WAIT;
+        }
+        if is_delimiter(input) {
+            // A damaged delimiter: an error in the command, not its end.
+            self.error = true;
         }
         if pos <= self.sum_at {
             self.error |= !row_parity_ok(input);
@@ -382,6 +405,8 @@ impl Controller {
                     self.error = true;
                 }
                 self.sum_at = if is_write(self.function) { 8 } else { 4 };
+                let guard = u8::try_from(guard_len(self.function)).unwrap_or(u8::MAX);
+                self.room_at = self.sum_at.saturating_add(1).saturating_add(guard);
             }
             3 => {
                 self.station = input & 0x1F;
@@ -397,14 +422,22 @@ impl Controller {
                     self.error = true;
                 }
             }
-            _ => {
-                // The first byte of the reply room: the command is complete.
+            p => {
+                // Guard and reply room up to the status byte: every byte must be SPACE. For a
+                // non-write that covers positions 5–8, where a write's d2, d3, d4 and SUM stand.
                 if input != SPACE {
                     self.error = true;
                 }
-                self.answer(dataway);
-                self.reply_sent = 1;
-                return self.reply.first().copied().unwrap_or(WAIT);
+                if p == self.room_at {
+                    // The reply's header does not depend on the status: it goes out now.
+                    return with_parity(self.config.address);
+                }
+                if p > self.room_at {
+                    // The status byte: everything up to here was checked.
+                    self.answer(dataway);
+                    self.reply_sent = 2;
+                    return self.reply.get(1).copied().unwrap_or(WAIT);
+                }
             }
         }
         WAIT
@@ -568,8 +601,9 @@ mod tests {
             })
         );
         assert_eq!(crate_.cycles, vec![(2, 0, 0, None)]);
-        // The reply sits exactly where the SPACE bytes were (one byte late).
-        assert_eq!(&out[6..13], &found[1][..]);
+        // The reply sits exactly where the SPACE bytes after the two guard bytes were (one byte
+        // late).
+        assert_eq!(&out[8..15], &found[1][..]);
     }
 
     #[test]

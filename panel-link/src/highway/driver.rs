@@ -5,8 +5,8 @@ use core::fmt;
 use heapless::Vec;
 
 use super::{
-    DecodeError, EncodeError, MAX_DECODE, MAX_MESSAGE, Message, NON_ADDRESSED, Status, WAIT,
-    decode, is_clean_delimiter, is_read,
+    DecodeError, EncodeError, Framer, MAX_DECODE, MAX_MESSAGE, Message, NON_ADDRESSED, Seen,
+    Status, WAIT, decode, is_read,
 };
 
 /// How a [`Driver`] works the loop.
@@ -15,7 +15,8 @@ use super::{
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct DriverConfig {
     /// Byte clocks after a command's last byte before it counts as lost. Make it longer than the
-    /// loop's round trip (controllers × 4 bytes of delay at most, plus two messages), so a reply
+    /// loop's round trip (controllers × 4 bytes of delay at most, plus two messages of at most
+    /// [`MAX_MESSAGE`] bytes and the gap), so a reply
     /// can never arrive after its command was given up or sent again.
     pub timeout: u32,
     /// How many times a command is sent again before it fails. A resend waits for the attempt's
@@ -188,7 +189,10 @@ struct Slot {
 ///
 /// [`submit`](Self::submit) queues a command and gives it a tag; every [`clock`](Self::clock)
 /// takes the byte arriving from the last crate and gives the byte to send, and at most one
-/// [`DriverEvent`]. A reply is matched to the command outstanding for its crate; a reply with ERR,
+/// [`DriverEvent`]. It follows message boundaries as the crate controllers do (a delimiter where
+/// the layout allows no end makes junk up to the next clean delimiter), and completes a command
+/// only with a reply whose every byte passed the checks, whose header names that command's crate
+/// and whose length is the one that command's function asks for. A reply with ERR,
 /// a command that came back unanswered and a time-out send the command again, up to
 /// [`DriverConfig::retries`] times. Execution is at least once: a reply lost on the way back
 /// means the command runs again (the highway has no sequence numbers), so a non-idempotent
@@ -220,7 +224,9 @@ pub struct Driver<const W: usize> {
     gap_left: u8,
     rx: [u8; MAX_DECODE],
     rx_len: usize,
-    rx_overflow: bool,
+    framer: Framer,
+    /// In junk already counted as garbled.
+    junk: bool,
     next_tag: u32,
     stats: DriverStats,
 }
@@ -239,7 +245,8 @@ impl<const W: usize> Driver<W> {
             gap_left: 0,
             rx: [WAIT; MAX_DECODE],
             rx_len: 0,
-            rx_overflow: false,
+            framer: Framer::new(),
+            junk: false,
             next_tag: 0,
             stats: DriverStats {
                 sent: 0,
@@ -361,27 +368,32 @@ impl<const W: usize> Driver<W> {
     }
 
     fn receive(&mut self, input: u8) -> Option<DriverEvent> {
-        let clean_delimiter = is_clean_delimiter(input);
-        if self.rx_len == 0 && clean_delimiter {
-            return None; // gap
+        // Message boundaries as every crate controller follows them: a message ends only with a
+        // clean delimiter where its layout allows an end; after a break the stream is junk up
+        // to the next clean delimiter, so a damaged message's tail is never taken for a reply.
+        let seen = self.framer.push(input);
+        if seen == Seen::Junk {
+            if !self.junk {
+                self.junk = true;
+                self.stats.garbled = self.stats.garbled.saturating_add(1);
+            }
+            self.rx_len = 0;
+            return None;
         }
-        match self.rx.get_mut(self.rx_len) {
-            Some(slot) => *slot = input,
-            None => self.rx_overflow = true,
+        self.junk = false;
+        match seen {
+            Seen::Gap | Seen::Junk => return None,
+            Seen::Header => self.rx_len = 0,
+            Seen::Text | Seen::End => {}
         }
-        if !self.rx_overflow {
+        if let Some(slot) = self.rx.get_mut(self.rx_len) {
+            *slot = input;
             self.rx_len = self.rx_len.saturating_add(1);
         }
-        // Only a clean delimiter ends a message: a damaged one is kept in, so the rest of a
-        // message can never be taken for a message of its own.
-        if !clean_delimiter {
+        if seen != Seen::End {
             return None;
         }
         let len = core::mem::take(&mut self.rx_len);
-        if core::mem::take(&mut self.rx_overflow) {
-            self.stats.garbled = self.stats.garbled.saturating_add(1);
-            return None;
-        }
         let bytes = self.rx.get(..len).unwrap_or(&[]);
         match decode(bytes) {
             Ok(Message::Reply {
