@@ -3,7 +3,7 @@
 use core::fmt;
 
 use crate::edf::Edf;
-use crate::link::Report;
+use crate::link::{Refill, Report};
 
 /// What the master must know of a slave: its ring size and how fast it consumes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -55,8 +55,10 @@ pub enum ReportOutcome {
         /// Items the slave has room for and the master has not yet sent.
         owed: u32,
     },
-    /// Older than, or the same as, a report already seen (a late or repeated message): ignored.
-    /// (A stand-alone slave's periodic report is never stale: it asks for a keep-alive.)
+    /// Older than, or the same as, a report already seen (a late or repeated message), or a
+    /// report of another boot than the current session's (the board before a reboot): ignored.
+    /// A stand-alone report of the current session is stale only if it is older than the
+    /// newest: the same counters again ask for a keep-alive and are accepted.
     Stale,
 }
 
@@ -74,9 +76,14 @@ pub struct Grant {
     /// The deadline this grant served (the source's `slack · t0` after the slave's report).
     pub deadline: u64,
     /// `true` when the grant came after its deadline: the slave may underrun. Counted in
-    /// [`SlaveStatus::missed`]. Never set while a slave is being filled after attach (it has
-    /// reported no consumption yet: its machine has not started).
+    /// [`SlaveStatus::missed`]. Never set while a slave is being filled after attach or after
+    /// a hello (it has reported no consumption yet: its machine has not started).
     pub late: bool,
+    /// The boot number of the session (the board's, from its reports).
+    pub boot: u8,
+    /// The board has said hello and has not yet reported from its new place: the refill must
+    /// be sent as a sync refill, which places it at `first`.
+    pub sync: bool,
 }
 
 impl Grant {
@@ -85,6 +92,19 @@ impl Grant {
     pub fn first_wire(&self) -> u16 {
         low16(self.first)
     }
+
+    /// The refill frame for this grant, carrying `items` (the stream's items from `first`),
+    /// to the slave at link address `address`.
+    #[must_use]
+    pub fn refill<'a>(&self, address: u8, items: &'a [u8]) -> Refill<'a> {
+        Refill {
+            slave: address,
+            first: self.first_wire(),
+            items,
+            boot: self.boot,
+            sync: self.sync,
+        }
+    }
 }
 
 /// One slave as the master sees it.
@@ -92,7 +112,8 @@ impl Grant {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SlaveStatus {
-    /// Attached and heard from at least once.
+    /// The slave's newest report says it takes the master's stream: it is placed in the
+    /// current session (not saying hello) and not stand-alone.
     pub linked: bool,
     /// Items owed now.
     pub owed: u32,
@@ -116,6 +137,11 @@ pub struct SlaveStatus {
     pub received: u64,
     /// Stream items granted (the next index to send).
     pub sent: u64,
+    /// Hellos with a boot number other than the session's: the board restarted (a power
+    /// cycle, a watchdog) and was placed again where the board before it stopped.
+    pub reboots: u32,
+    /// The current session's boot number.
+    pub boot: u8,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -123,8 +149,12 @@ struct Link {
     params: Option<SlaveParams>,
     status: SlaveStatus,
     report_at: u64,
-    /// The consumed count of the first report after attach.
+    /// The consumed count of the first report after attach, or where the session started.
     first_consumed: u64,
+    /// A report has been accepted since attach: the counters mean something.
+    heard: bool,
+    /// The board said hello and has not reported from its place yet: grants are sync grants.
+    syncing: bool,
 }
 
 impl Link {
@@ -143,9 +173,13 @@ impl Link {
             consumed: 0,
             received: 0,
             sent: 0,
+            reboots: 0,
+            boot: 0,
         },
         report_at: 0,
         first_consumed: 0,
+        heard: false,
+        syncing: false,
     };
 
     fn owed(&self) -> u32 {
@@ -161,7 +195,7 @@ impl Link {
     /// consumed` items at its last report; the next one is due that many periods after it.
     fn deadline(&self) -> Option<u64> {
         let params = self.params?;
-        if !self.status.linked || self.owed() == 0 {
+        if !self.heard || self.owed() == 0 {
             return None;
         }
         let ahead = self.status.sent.saturating_sub(self.status.consumed);
@@ -197,7 +231,7 @@ fn extend(known: u64, wire: u16) -> Option<u64> {
 /// master.attach(0, SlaveParams { capacity: 256, t0: 2_300 })?; // µs per needle
 /// master.attach(1, SlaveParams { capacity: 64, t0: 2_100 })?;
 /// let report = |slave: u8, consumed, received| {
-///     Report { slave, consumed, received, standalone: false, retry: false }
+///     Report { slave, consumed, received, standalone: false, retry: false, boot: 0, hello: false }
 /// };
 /// // Both start empty and are filled.
 /// for slave in 0..2 {
@@ -292,11 +326,19 @@ impl<const S: usize> Master<S> {
     }
 
     /// Takes a slave's report received at `now`. The first report after `attach` sets the
-    /// counters; after that a report counts only if it is newer than every one before it, so
-    /// any pattern of lost, repeated and reordered reports leaves the master owing exactly what
-    /// the newest report says. A retry report makes the master send again from the slave's
-    /// `received` count (a refill was lost); a slave that skipped items after an underrun moves
-    /// the master past them. `report.slave` is not looked at: `slave` says who sent it.
+    /// counters; after that a report counts only if it is of the current session's boot number
+    /// and newer than every one before it, so any pattern of lost, repeated and reordered
+    /// reports leaves the master owing exactly what the newest report says. A retry report
+    /// makes the master send again from the slave's `received` count (a refill was lost); a
+    /// slave that skipped items after an underrun moves the master past them. `report.slave`
+    /// is not looked at: `slave` says who sent it.
+    ///
+    /// **A hello** (a board that has just started) starts a new session with its boot number:
+    /// the stream resumes at the newest `consumed` count this master holds for the slave (0
+    /// after attach) — the items the board before it held in its ring are sent again, nothing
+    /// is skipped; repeated are only the items that board consumed after its newest report that
+    /// reached the master. Grants are then [`Grant::sync`] until the board reports from its new
+    /// place; a hello with a new boot number counts in [`SlaveStatus::reboots`].
     ///
     /// # Errors
     /// [`MasterError::UnknownSlave`] or [`MasterError::NotAttached`].
@@ -312,7 +354,29 @@ impl<const S: usize> Master<S> {
             .get_mut(slave)
             .ok_or(MasterError::UnknownSlave(slave))?;
         let status = &mut link.status;
-        if status.linked {
+        if report.hello {
+            if link.heard && report.boot != status.boot {
+                status.reboots = status.reboots.saturating_add(1);
+            }
+            link.heard = true;
+            link.syncing = true;
+            status.boot = report.boot;
+            status.linked = false;
+            status.standalone = report.standalone;
+            status.received = status.consumed;
+            status.sent = status.consumed;
+            link.first_consumed = status.consumed;
+            status.reports = status.reports.saturating_add(1);
+            link.report_at = now;
+            let owed = link.owed();
+            self.refresh(slave);
+            return Ok(ReportOutcome::Accepted { owed });
+        }
+        if link.heard && report.boot != status.boot {
+            status.stale_reports = status.stale_reports.saturating_add(1);
+            return Ok(ReportOutcome::Stale);
+        }
+        if link.heard {
             let (Some(consumed), Some(received)) = (
                 extend(status.consumed, report.consumed),
                 extend(status.received, report.received),
@@ -328,7 +392,8 @@ impl<const S: usize> Master<S> {
             status.consumed = consumed;
             status.received = received;
         } else {
-            status.linked = true;
+            link.heard = true;
+            status.boot = report.boot;
             link.first_consumed = u64::from(report.consumed);
             status.consumed = u64::from(report.consumed);
             status.received = u64::from(report.received);
@@ -342,6 +407,8 @@ impl<const S: usize> Master<S> {
         // underrun, or a master restarted behind its slave): never send them again.
         status.sent = status.sent.max(status.received);
         status.standalone = report.standalone;
+        link.syncing = false;
+        status.linked = !report.standalone;
         status.reports = status.reports.saturating_add(1);
         link.report_at = now;
         let owed = link.owed();
@@ -380,6 +447,7 @@ impl<const S: usize> Master<S> {
         }
         let first = link.status.sent;
         link.status.sent = first.saturating_add(u64::from(count));
+        let (boot, sync) = (link.status.boot, link.syncing);
         self.refresh(slave);
         Some(Grant {
             slave,
@@ -387,6 +455,8 @@ impl<const S: usize> Master<S> {
             count,
             deadline,
             late,
+            boot,
+            sync,
         })
     }
 
@@ -426,6 +496,8 @@ mod tests {
             received,
             standalone: false,
             retry: false,
+            boot: 0,
+            hello: false,
         }
     }
 
