@@ -350,6 +350,7 @@ impl Board {
             row_len: config.needles,
             silence_limit: config.silence_needles,
             retry_after: 16,
+            boot: 1,
         })
         .map_err(|e| e.to_string())?;
         Ok(Self {
@@ -429,6 +430,12 @@ impl Board {
                 needles: std::mem::take(&mut self.current),
             });
         }
+        self.slave.poll_report()
+    }
+
+    /// The board's first report (a hello: it has no place in the stream until the master
+    /// answers).
+    pub fn announce(&mut self) -> Option<Report> {
         self.slave.poll_report()
     }
 
@@ -522,13 +529,7 @@ impl Host {
             Ok(ReportOutcome::Accepted { owed: 0 }) => {
                 self.keep_alives += 1;
                 let mut frame = vec![0u8; link::MAX_FRAME];
-                let n = Refill {
-                    slave: report.slave,
-                    first: 0,
-                    items: &[],
-                }
-                .encode(&mut frame)
-                .ok()?;
+                let n = Refill::keep_alive(report.slave).encode(&mut frame).ok()?;
                 frame.truncate(n);
                 Some(frame)
             }
@@ -543,13 +544,7 @@ impl Host {
             .map(|k| self.byte(grant.slave, grant.first + k))
             .collect();
         let mut frame = vec![0u8; link::MAX_FRAME];
-        let n = Refill {
-            slave: grant.slave as u8,
-            first: grant.first_wire(),
-            items: &items,
-        }
-        .encode(&mut frame)
-        .ok()?;
+        let n = grant.refill(grant.slave as u8, &items).encode(&mut frame).ok()?;
         frame.truncate(n);
         self.frames += 1;
         self.items_sent += u64::from(grant.count);
@@ -1031,10 +1026,11 @@ impl Sim {
             let phase = sim.rng.random_range(0..sim.boards[i].t0_ns);
             sim.push(50_000_000 + phase, Event::Needle(i));
             // Each board announces itself.
-            let hello = sim.boards[i].slave().report(false);
             let mut frame = [0u8; link::REPORT_LEN];
-            if hello.encode(&mut frame).is_ok() {
-                sim.push(0, Event::Report(i, frame.to_vec()));
+            if let Some(hello) = sim.boards[i].announce() {
+                if hello.encode(&mut frame).is_ok() {
+                    sim.push(0, Event::Report(i, frame.to_vec()));
+                }
             }
         }
         for k in 0..sim.script.len() {
@@ -1349,7 +1345,9 @@ pub fn run_udp(config: &Config) -> Result<(Summary, Vec<Board>), String> {
                         let _ = socket.send_to(&frame, master_address);
                     }
                 };
-                send_report(board.slave().report(false));
+                if let Some(hello) = board.announce() {
+                    send_report(hello);
+                }
                 let begin = Duration::from_millis(100);
                 let mut done = 0u64;
                 while start.elapsed() < run_for {

@@ -81,8 +81,10 @@ pub struct Grant {
     pub late: bool,
     /// The boot number of the session (the board's, from its reports).
     pub boot: u8,
-    /// The board has said hello and has not yet reported from its new place: the refill must
-    /// be sent as a sync refill, which places it at `first`.
+    /// The board has said hello, has not yet reported from its new place, and this grant
+    /// starts where the session starts: the refill must be sent as a sync refill, which places
+    /// the board at `first`. (If it is lost, the board says hello again and the master starts
+    /// the session again from the same place.)
     pub sync: bool,
 }
 
@@ -338,7 +340,8 @@ impl<const S: usize> Master<S> {
     /// after attach) — the items the board before it held in its ring are sent again, nothing
     /// is skipped; repeated are only the items that board consumed after its newest report that
     /// reached the master. Grants are then [`Grant::sync`] until the board reports from its new
-    /// place; a hello with a new boot number counts in [`SlaveStatus::reboots`].
+    /// place (only the one that starts at the session's first index is a sync grant); a hello
+    /// with a new boot number counts in [`SlaveStatus::reboots`].
     ///
     /// # Errors
     /// [`MasterError::UnknownSlave`] or [`MasterError::NotAttached`].
@@ -447,7 +450,10 @@ impl<const S: usize> Master<S> {
         }
         let first = link.status.sent;
         link.status.sent = first.saturating_add(u64::from(count));
-        let (boot, sync) = (link.status.boot, link.syncing);
+        // Only the grant that starts at the session's first index places the board: a later one
+        // taken as a sync (its predecessor lost) would skip the items between.
+        let sync = link.syncing && first == link.first_consumed;
+        let boot = link.status.boot;
         self.refresh(slave);
         Some(Grant {
             slave,

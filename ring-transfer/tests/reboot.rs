@@ -129,8 +129,10 @@ proptest! {
         duplicate in 0u8..80,
         late in 0u8..80,
         delay in 1u64..4,
+        batch in 1u32..20,
     ) {
         let mut sim: Sim<16> = Sim::new(config(6), offset, delay, seed);
+        sim.batch = batch;
         for wire in [&mut sim.up, &mut sim.down] {
             wire.loss = loss;
             wire.duplicate = duplicate;

@@ -118,6 +118,8 @@ pub(crate) struct Sim<const N: usize> {
     pub(crate) master_up: bool,
     pub(crate) faulty: bool,
     pub(crate) stale_standalone: u32,
+    /// Items per refill frame at most.
+    pub(crate) batch: u32,
 }
 
 impl<const N: usize> Sim<N> {
@@ -172,6 +174,7 @@ impl<const N: usize> Sim<N> {
             master_up: true,
             faulty: false,
             stale_standalone: 0,
+            batch: link::MAX_REFILL as u32,
         }
     }
 
@@ -223,7 +226,7 @@ impl<const N: usize> Sim<N> {
         if self.master_up {
             let mut items = [0u8; link::MAX_REFILL];
             let mut frame = [0u8; link::MAX_FRAME];
-            while let Some(g) = self.master.next_refill(now, link::MAX_REFILL as u32) {
+            while let Some(g) = self.master.next_refill(now, self.batch) {
                 let n = g.count as usize;
                 for (k, item) in items[..n].iter_mut().enumerate() {
                     *item = stream(g.first + k as u64);
