@@ -544,7 +544,10 @@ impl Host {
             .map(|k| self.byte(grant.slave, grant.first + k))
             .collect();
         let mut frame = vec![0u8; link::MAX_FRAME];
-        let n = grant.refill(grant.slave as u8, &items).encode(&mut frame).ok()?;
+        let n = grant
+            .refill(grant.slave as u8, &items)
+            .encode(&mut frame)
+            .ok()?;
         frame.truncate(n);
         self.frames += 1;
         self.items_sent += u64::from(grant.count);

@@ -243,7 +243,9 @@ impl Report {
         if self.hello {
             flags |= FLAG_HELLO;
         }
-        frame.copy_from_slice(&[REPORT_TAG, self.slave, c0, c1, r0, r1, flags, self.boot, 0, 0]);
+        frame.copy_from_slice(&[
+            REPORT_TAG, self.slave, c0, c1, r0, r1, flags, self.boot, 0, 0,
+        ]);
         seal(frame).map_or(
             Err(EncodeError::BufferTooSmall {
                 needed: REPORT_LEN,
@@ -346,7 +348,16 @@ pub fn decode(bytes: &[u8]) -> Result<Message<'_>, DecodeError> {
                 hello: flags & FLAG_HELLO != 0,
             }))
         }
-        [REFILL_TAG, slave, f0, f1, flags, boot, _count, ref items @ ..] => {
+        [
+            REFILL_TAG,
+            slave,
+            f0,
+            f1,
+            flags,
+            boot,
+            _count,
+            ref items @ ..,
+        ] => {
             if flags & !FLAG_SYNC != 0 {
                 return Err(DecodeError::ReservedFlags(flags));
             }

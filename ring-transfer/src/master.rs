@@ -635,4 +635,93 @@ mod tests {
         );
         assert_eq!(m.next_refill(3, 4).unwrap().first, 3);
     }
+
+    #[test]
+    fn a_stand_alone_report_of_the_session_is_never_stale() {
+        // Any counters (near the half range and the wrap too), the same stand-alone report any
+        // number of times: accepted every time; an older one is stale.
+        for start in [0u16, 100, 32_767, 32_768, 65_535] {
+            let mut m: Master<1> = Master::new();
+            m.attach(0, SlaveParams { capacity: 8, t0: 1 }).unwrap();
+            m.on_report(0, 0, &report(start, start)).unwrap();
+            let alone = Report {
+                standalone: true,
+                ..report(start.wrapping_add(5), start.wrapping_add(8))
+            };
+            for now in 1..5 {
+                assert_eq!(
+                    m.on_report(now, 0, &alone),
+                    Ok(ReportOutcome::Accepted { owed: 5 }),
+                    "start {start}"
+                );
+            }
+            let older = Report {
+                standalone: true,
+                ..report(start.wrapping_add(4), start.wrapping_add(8))
+            };
+            assert_eq!(m.on_report(6, 0, &older), Ok(ReportOutcome::Stale));
+            let s = m.status(0).unwrap();
+            assert!(
+                s.standalone && !s.linked,
+                "a stand-alone slave is not linked"
+            );
+        }
+    }
+
+    #[test]
+    fn a_hello_starts_a_session_where_the_board_before_stopped() {
+        let mut m: Master<1> = Master::new();
+        m.attach(0, SlaveParams { capacity: 8, t0: 1 }).unwrap();
+        // The board ran 40 000 items (past half the counter range) and reported them.
+        let mut at = 0u64;
+        while at < 40_000 {
+            at += 10_000;
+            m.on_report(0, 0, &report(at as u16, at as u16)).unwrap();
+        }
+        while m.next_refill(0, 64).is_some() {}
+        assert!(m.status(0).unwrap().linked);
+        let hello = Report {
+            boot: 1,
+            hello: true,
+            standalone: true,
+            ..report(0, 0)
+        };
+        assert_eq!(
+            m.on_report(1, 0, &hello),
+            Ok(ReportOutcome::Accepted { owed: 8 })
+        );
+        let s = m.status(0).unwrap();
+        assert_eq!((s.reboots, s.boot, s.linked), (1, 1, false));
+        let g = m.next_refill(1, 3).unwrap();
+        assert_eq!(
+            (g.first, g.count, g.sync, g.boot, g.late),
+            (40_000, 3, true, 1, false)
+        );
+        let g = m.next_refill(1, 3).unwrap();
+        assert_eq!(
+            (g.first, g.sync),
+            (40_003, false),
+            "only the first grant places the board"
+        );
+        // A late report of the board before the reboot is ignored, so is a late hello's copy
+        // counted once.
+        assert_eq!(
+            m.on_report(2, 0, &report(40_005, 40_008)),
+            Ok(ReportOutcome::Stale)
+        );
+        m.on_report(2, 0, &hello).unwrap();
+        assert_eq!(m.status(0).unwrap().reboots, 1);
+        // The board reports from its place: linked.
+        let placed = Report {
+            boot: 1,
+            ..report(40_001, 40_003)
+        };
+        assert_eq!(
+            m.on_report(3, 0, &placed),
+            Ok(ReportOutcome::Accepted { owed: 6 })
+        );
+        let s = m.status(0).unwrap();
+        assert!(s.linked);
+        assert_eq!(s.consumed, 40_001);
+    }
 }

@@ -87,7 +87,8 @@ impl core::error::Error for FrameError {}
 pub enum Mode {
     /// From the master, through the ring.
     Linked,
-    /// From the local pattern (the source's ROM or tape): the master was silent too long.
+    /// From the local pattern (the source's ROM or tape): the master was silent too long, or
+    /// has not yet placed this new slave in its stream.
     StandAlone,
 }
 
@@ -605,7 +606,15 @@ mod tests {
         let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
         refill(&mut s, 0, &[10, 11, 12, 13]).unwrap();
         for item in 10..14 {
-            assert_eq!(s.step(|_, _| 0xEE), Output { item, source: Source::Master, row: 0, col: item as u16 - 10 });
+            assert_eq!(
+                s.step(|_, _| 0xEE),
+                Output {
+                    item,
+                    source: Source::Master,
+                    row: 0,
+                    col: item as u16 - 10
+                }
+            );
         }
         let out = s.step(|_, _| 0xEE);
         assert_eq!((out.item, out.source), (0xEE, Source::Underrun));
@@ -643,13 +652,23 @@ mod tests {
         let hello = s.poll_report().unwrap();
         assert!(hello.hello && hello.standalone);
         assert_eq!(hello.boot, 9);
-        assert_eq!(s.poll_report(), None, "the next hello after retry_after steps");
+        assert_eq!(
+            s.poll_report(),
+            None,
+            "the next hello after retry_after steps"
+        );
         let mut buf = [0; MAX_FRAME];
         // A plain refill, or a sync for another boot, does not place it.
         for (boot, sync) in [(9, false), (8, true)] {
-            let n = Refill { slave: 1, first: 100, items: &[1, 2, 3, 4], boot, sync }
-                .encode(&mut buf)
-                .unwrap();
+            let n = Refill {
+                slave: 1,
+                first: 100,
+                items: &[1, 2, 3, 4],
+                boot,
+                sync,
+            }
+            .encode(&mut buf)
+            .unwrap();
             assert_eq!(s.on_frame(&buf[..n]), Ok(0));
             assert!(!s.placed());
         }
@@ -657,21 +676,41 @@ mod tests {
             assert_eq!(s.step(|_, _| 0xEE).source, Source::Local);
         }
         assert!(s.poll_report().unwrap().hello);
-        let n = Refill { slave: 1, first: 100, items: &[1, 2, 3, 4], boot: 9, sync: true }
-            .encode(&mut buf)
-            .unwrap();
+        let n = Refill {
+            slave: 1,
+            first: 100,
+            items: &[1, 2, 3, 4],
+            boot: 9,
+            sync: true,
+        }
+        .encode(&mut buf)
+        .unwrap();
         assert_eq!(s.on_frame(&buf[..n]), Ok(4));
         assert!(s.placed());
         // The rest of the local row, then the master's items from index 100.
         assert_eq!(s.step(|_, _| 0xEE).source, Source::Local);
-        assert_eq!(s.step(|_, _| 0xEE), Output { item: 1, source: Source::Master, row: 1, col: 0 });
+        assert_eq!(
+            s.step(|_, _| 0xEE),
+            Output {
+                item: 1,
+                source: Source::Master,
+                row: 1,
+                col: 0
+            }
+        );
         let r = s.poll_report().unwrap();
         assert!(!r.hello);
         assert_eq!((r.consumed, r.received), (101, 104));
         // A sync for another boot: hello again, ring and counters kept.
-        let n = Refill { slave: 1, first: 0, items: &[], boot: 7, sync: true }
-            .encode(&mut buf)
-            .unwrap();
+        let n = Refill {
+            slave: 1,
+            first: 0,
+            items: &[],
+            boot: 7,
+            sync: true,
+        }
+        .encode(&mut buf)
+        .unwrap();
         assert_eq!(s.on_frame(&buf[..n]), Ok(0));
         let r = s.poll_report().unwrap();
         assert!(r.hello);

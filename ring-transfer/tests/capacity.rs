@@ -2,6 +2,8 @@
 //! search relies on, and limits up to the integers' maximum answered at once.
 #![allow(
     clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
     clippy::indexing_slicing,
     clippy::arithmetic_side_effects,
     clippy::cast_possible_truncation,
@@ -105,5 +107,9 @@ fn the_largest_limits_return_at_once() {
         capacity::min_ring(&far, late, 0, u32::MAX),
         Ok(Some(3_000_000_002))
     );
-    assert!(started.elapsed() < Duration::from_secs(2), "{:?}", started.elapsed());
+    assert!(
+        started.elapsed() < Duration::from_secs(2),
+        "{:?}",
+        started.elapsed()
+    );
 }

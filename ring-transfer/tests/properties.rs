@@ -13,8 +13,8 @@ use std::collections::VecDeque;
 use proptest::prelude::*;
 use regler_ring_transfer::capacity::{self, LinkSpec, Load, Verdict};
 use regler_ring_transfer::{
-    Master, Mode, Refill, Report, ReportOutcome, Ring, SharedRing, Slave, SlaveConfig, SlaveParams,
-    Source, link,
+    Master, Mode, Report, ReportOutcome, Ring, SharedRing, Slave, SlaveConfig, SlaveParams, Source,
+    link,
 };
 
 #[derive(Debug, Clone, Copy)]

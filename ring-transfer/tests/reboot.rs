@@ -3,6 +3,8 @@
 //! placed again where the board before it stopped, and linked again within a bound.
 #![allow(
     clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
     clippy::indexing_slicing,
     clippy::arithmetic_side_effects,
     clippy::cast_possible_truncation,
@@ -16,7 +18,14 @@ use proptest::prelude::*;
 use regler_ring_transfer::{Mode, SlaveConfig, Source};
 
 const OFFSETS: [u64; 8] = [
-    0, 32_500, 32_767, 32_768, 40_000, 65_300, 65_535, 65_536 + 32_700,
+    0,
+    32_500,
+    32_767,
+    32_768,
+    40_000,
+    65_300,
+    65_535,
+    65_536 + 32_700,
 ];
 
 fn config(row_len: u16) -> SlaveConfig {
@@ -56,23 +65,38 @@ fn check_clean<const N: usize>(row_len: u16, offset: u64, delay: u64, reboot_at:
     let bound = 2 * delay + u64::from(row_len);
     let steps = reboot_at + bound + delay + 4;
     let sim: Sim<N> = run(row_len, offset, delay, reboot_at, steps);
-    let ctx = format!("ring {N}, row {row_len}, offset {offset}, delay {delay}, reboot at {reboot_at}");
+    let ctx =
+        format!("ring {N}, row {row_len}, offset {offset}, delay {delay}, reboot at {reboot_at}");
     sim.check_items();
     // Where the old board stopped: its consumed count after its last step.
     let old_final = sim
         .steps
         .iter()
         .filter(|s| s.boot == 1)
-        .fold(offset, |_, s| s.index.map_or(offset, |i| i + u64::from(s.out.source != Source::Local)));
-    let placed = sim.placements.iter().find(|p| p.0 == 2).unwrap_or_else(|| panic!("{ctx}: new board never placed"));
-    assert_eq!(placed.1, old_final, "{ctx}: placed at {} not where the old board stopped", placed.1);
+        .fold(offset, |_, s| {
+            s.index
+                .map_or(offset, |i| i + u64::from(s.out.source != Source::Local))
+        });
+    let placed = sim
+        .placements
+        .iter()
+        .find(|p| p.0 == 2)
+        .unwrap_or_else(|| panic!("{ctx}: new board never placed"));
+    assert_eq!(
+        placed.1, old_final,
+        "{ctx}: placed at {} not where the old board stopped",
+        placed.1
+    );
     let linked_at = sim
         .steps
         .iter()
         .find(|s| s.boot == 2 && s.mode_after == Mode::Linked)
         .unwrap_or_else(|| panic!("{ctx}: not linked again"))
         .now;
-    assert!(linked_at < reboot_at + bound, "{ctx}: linked at {linked_at}");
+    assert!(
+        linked_at < reboot_at + bound,
+        "{ctx}: linked at {linked_at}"
+    );
     let status = sim.master.status(0).unwrap();
     // Reboots: the board that was running when the master started → boot 1 (if it lived to
     // say hello) → boot 2.

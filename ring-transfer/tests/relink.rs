@@ -3,6 +3,8 @@
 //! ranges of every field) and link delays `d` of 1–4 steps.
 #![allow(
     clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
     clippy::indexing_slicing,
     clippy::arithmetic_side_effects,
     clippy::cast_possible_truncation,
@@ -32,7 +34,11 @@ fn outage<const N: usize>(config: SlaveConfig, delay: u64, start: u64, jitter: (
     let mut now = 0;
     loop {
         if now == start {
-            assert_eq!(sim.slave.mode(), Mode::Linked, "{ctx}: linked before the outage");
+            assert_eq!(
+                sim.slave.mode(),
+                Mode::Linked,
+                "{ctx}: linked before the outage"
+            );
             sim.master_up = false;
         }
         if now == end {
@@ -55,7 +61,11 @@ fn outage<const N: usize>(config: SlaveConfig, delay: u64, start: u64, jitter: (
         if sim.slave.mode() == Mode::Linked {
             break;
         }
-        assert!(now - end <= bound, "{ctx}: still stand-alone {} steps after the master came back", now - end);
+        assert!(
+            now - end <= bound,
+            "{ctx}: still stand-alone {} steps after the master came back",
+            now - end
+        );
     }
     sim.check_items();
     now - end

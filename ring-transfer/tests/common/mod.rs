@@ -3,6 +3,8 @@
 #![allow(
     dead_code,
     clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
     clippy::indexing_slicing,
     clippy::arithmetic_side_effects,
     clippy::cast_possible_truncation,
@@ -66,19 +68,23 @@ impl Wire {
         if faulty && self.roll() < self.loss {
             return;
         }
-        let copies = if faulty && self.roll() < self.duplicate { 2 } else { 1 };
+        let copies = if faulty && self.roll() < self.duplicate {
+            2
+        } else {
+            1
+        };
         for _ in 0..copies {
             let extra = if faulty && self.jitter > 0 && self.roll() < self.late {
                 1 + u64::from(self.roll()) % self.jitter
             } else {
                 0
             };
-            self.in_flight.push((now + self.delay + extra, frame.to_vec()));
+            self.in_flight
+                .push((now + self.delay + extra, frame.to_vec()));
         }
     }
     pub(crate) fn arrived(&mut self, now: u64) -> Vec<Vec<u8>> {
-        let (due, later): (Vec<_>, Vec<_>) =
-            self.in_flight.drain(..).partition(|(t, _)| *t <= now);
+        let (due, later): (Vec<_>, Vec<_>) = self.in_flight.drain(..).partition(|(t, _)| *t <= now);
         self.in_flight = later;
         due.into_iter().map(|(_, f)| f).collect()
     }
