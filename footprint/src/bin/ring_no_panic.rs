@@ -24,7 +24,10 @@ static mut OUT: u32 = 0;
 #[entry]
 fn main() -> ! {
     let mut loads = [Load { t0: 1, ring: 2 }; 3];
-    for (load, stored) in loads.iter_mut().zip(unsafe { read_volatile(addr_of!(LOADS)) }) {
+    for (load, stored) in loads
+        .iter_mut()
+        .zip(unsafe { read_volatile(addr_of!(LOADS)) })
+    {
         *load = Load {
             t0: stored.0,
             ring: stored.1,
@@ -36,11 +39,15 @@ fn main() -> ! {
     };
     let limit = unsafe { read_volatile(addr_of!(LIMIT)) };
     let mut answer = 0u32;
-    let verdict = stack("capacity::check (3 slaves)", || capacity::check(&loads[..2], link));
+    let verdict = stack("capacity::check (2 slaves)", || {
+        capacity::check(&loads[..2], link)
+    });
     answer ^= u32::from(verdict.is_ok_and(|v| v.is_schedulable()));
     // The third load has t0 = 0: an error, never a division by zero.
     answer ^= u32::from(capacity::check(&loads, link).is_err()) << 1;
-    let most = stack("capacity::max_slaves", || capacity::max_slaves(loads[0], link, limit));
+    let most = stack("capacity::max_slaves", || {
+        capacity::max_slaves(loads[0], link, limit)
+    });
     answer ^= most.map_or(0, |n| n as u32);
     let ring = stack("capacity::min_ring", || {
         capacity::min_ring(&loads[..2], link, 1, u32::MAX)
@@ -58,18 +65,26 @@ fn main() -> ! {
         refused()
     };
     let mut master: Master<2> = Master::new();
-    if master.attach(1, SlaveParams { capacity: 64, t0: 2_308 }).is_err() {
+    if master
+        .attach(
+            1,
+            SlaveParams {
+                capacity: 64,
+                t0: 2_308,
+            },
+        )
+        .is_err()
+    {
         refused()
     }
     let mut frame = [0u8; link::MAX_FRAME];
     let mut items = [0u8; link::MAX_REFILL];
     for now in 0..1_000u64 {
-        if let Some(report) = slave.poll_report() {
-            if let Ok(n) = report.encode(&mut frame) {
-                if let Ok(link::Message::Report(r)) = link::decode(&frame[..n]) {
-                    let _ = master.on_report(now, 1, &r);
-                }
-            }
+        if let Some(report) = slave.poll_report()
+            && let Ok(n) = report.encode(&mut frame)
+            && let Ok(link::Message::Report(r)) = link::decode(&frame[..n])
+        {
+            let _ = master.on_report(now, 1, &r);
         }
         while let Some(grant) = master.next_refill(now, link::MAX_REFILL as u32) {
             let n = (grant.count as usize).min(items.len());
