@@ -131,6 +131,8 @@ fn scheduler(c: &mut Criterion) {
                 received: 0,
                 standalone: false,
                 retry: false,
+                boot: 0,
+                hello: false,
             };
             master.on_report(0, i, &hello).expect("report");
         }
@@ -149,6 +151,8 @@ fn scheduler(c: &mut Criterion) {
                         received: consumed[s].wrapping_add(64),
                         standalone: false,
                         retry: false,
+                        boot: 0,
+                        hello: false,
                     };
                     black_box(master.on_report(now, s, &r).ok());
                 } else {
@@ -161,6 +165,8 @@ fn scheduler(c: &mut Criterion) {
                         received: consumed[s].wrapping_add(64),
                         standalone: false,
                         retry: false,
+                        boot: 0,
+                        hello: false,
                     };
                     black_box(master.on_report(now, s, &r).ok());
                 }

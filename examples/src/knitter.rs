@@ -6,7 +6,7 @@
 //! rpm; every needle takes **one pattern byte** (the yarn feed it selects: a colour 0–3), so a
 //! machine at 130 rpm consumes a byte every 60 s / (130 · 200) ≈ 2.31 ms — the source's "about
 //! 2 ms". One round is one row of fabric. Each board has a 256-byte ring (`Slave<256>`). The
-//! master's link is shared: a refill frame of `k` items occupies it for `(7 + k)` byte times;
+//! master's link is shared: a refill frame of `k` items occupies it for `(9 + k)` byte times;
 //! reports travel on each board's own request line (the source's interrupt) after a short
 //! latency. Both directions lose and duplicate frames at the rates given, from a seeded
 //! generator. A job is a jacquard pattern of `job_rows` rows; `C` queues the next job for a
@@ -28,8 +28,12 @@ use serde::Serialize;
 pub const RING: usize = 256;
 /// The most machines one run simulates.
 pub const MAX_MACHINES: usize = 100;
-/// Bytes a refill frame adds to its items.
-pub const FRAME_OVERHEAD: u64 = 7;
+/// When the machines start (plus a phase of up to one needle each): after the master's first
+/// fill of eight rings on the default link (8 × 256 frames of 10 bytes at 3 µs: 61 ms). A board
+/// whose ring does not cover a row at its first needle knits that row from its local pattern.
+pub const START_NS: u64 = 100_000_000;
+/// Bytes a refill frame adds to its items (tag, address, first index, flags, boot, count, CRC).
+pub const FRAME_OVERHEAD: u64 = (link::MAX_FRAME - link::MAX_REFILL) as u64;
 
 /// How a run is set up.
 #[derive(Clone, Debug, Serialize)]
@@ -350,6 +354,7 @@ impl Board {
             row_len: config.needles,
             silence_limit: config.silence_needles,
             retry_after: 16,
+            boot: 1,
         })
         .map_err(|e| e.to_string())?;
         Ok(Self {
@@ -429,6 +434,12 @@ impl Board {
                 needles: std::mem::take(&mut self.current),
             });
         }
+        self.slave.poll_report()
+    }
+
+    /// The board's first report (a hello: it has no place in the stream until the master
+    /// answers).
+    pub fn announce(&mut self) -> Option<Report> {
         self.slave.poll_report()
     }
 
@@ -522,13 +533,7 @@ impl Host {
             Ok(ReportOutcome::Accepted { owed: 0 }) => {
                 self.keep_alives += 1;
                 let mut frame = vec![0u8; link::MAX_FRAME];
-                let n = Refill {
-                    slave: report.slave,
-                    first: 0,
-                    items: &[],
-                }
-                .encode(&mut frame)
-                .ok()?;
+                let n = Refill::keep_alive(report.slave).encode(&mut frame).ok()?;
                 frame.truncate(n);
                 Some(frame)
             }
@@ -543,13 +548,10 @@ impl Host {
             .map(|k| self.byte(grant.slave, grant.first + k))
             .collect();
         let mut frame = vec![0u8; link::MAX_FRAME];
-        let n = Refill {
-            slave: grant.slave as u8,
-            first: grant.first_wire(),
-            items: &items,
-        }
-        .encode(&mut frame)
-        .ok()?;
+        let n = grant
+            .refill(grant.slave as u8, &items)
+            .encode(&mut frame)
+            .ok()?;
         frame.truncate(n);
         self.frames += 1;
         self.items_sent += u64::from(grant.count);
@@ -1029,12 +1031,13 @@ impl Sim {
         // Machines start at staggered phases, after the master's first fill.
         for i in 0..sim.boards.len() {
             let phase = sim.rng.random_range(0..sim.boards[i].t0_ns);
-            sim.push(50_000_000 + phase, Event::Needle(i));
+            sim.push(START_NS + phase, Event::Needle(i));
             // Each board announces itself.
-            let hello = sim.boards[i].slave().report(false);
             let mut frame = [0u8; link::REPORT_LEN];
-            if hello.encode(&mut frame).is_ok() {
-                sim.push(0, Event::Report(i, frame.to_vec()));
+            if let Some(hello) = sim.boards[i].announce() {
+                if hello.encode(&mut frame).is_ok() {
+                    sim.push(0, Event::Report(i, frame.to_vec()));
+                }
             }
         }
         for k in 0..sim.script.len() {
@@ -1102,7 +1105,7 @@ impl Sim {
                 Event::Report(m, bytes) => {
                     if self.master_up(at) {
                         if let Some(keep_alive) = self.host.report(at, m, &bytes) {
-                            // A keep-alive goes out between refills (short: 7 bytes).
+                            // A keep-alive goes out between refills (short: 9 bytes).
                             self.deliver(at + self.config.frame_ns(0), || {
                                 Event::Frame(m, keep_alive.clone())
                             });
@@ -1349,7 +1352,9 @@ pub fn run_udp(config: &Config) -> Result<(Summary, Vec<Board>), String> {
                         let _ = socket.send_to(&frame, master_address);
                     }
                 };
-                send_report(board.slave().report(false));
+                if let Some(hello) = board.announce() {
+                    send_report(hello);
+                }
                 let begin = Duration::from_millis(100);
                 let mut done = 0u64;
                 while start.elapsed() < run_for {

@@ -53,7 +53,7 @@ fn eight_machines_knit_without_underrun_while_schedulable() {
     for m in machines(&r) {
         let rpm = m["rpm"].as_u64().unwrap();
         assert!((120..=140).contains(&rpm));
-        // 10 s at rpm/60 rows per second, less the 50 ms start.
+        // 10 s at rpm/60 rows per second, less the 100 ms start.
         let rows = m["rows"].as_u64().unwrap();
         assert!(rows + 1 >= rpm * 10 / 60 && rows <= rpm * 10 / 60, "{m}");
         assert_eq!(m["master_rows"], m["rows"]);
@@ -101,11 +101,19 @@ fn a_silent_master_and_a_lossy_link_leave_whole_rows() {
 }
 
 #[test]
-fn an_overloaded_link_is_called_so_and_does_underrun() {
-    // 30 machines on a link of 80 µs per byte: 30 × 8 × 80 µs = 19 ms of link per 2.3 ms.
-    let r = json(&["--seconds", "3", "--machines", "30", "--byte-ns", "80000"]);
+fn an_overloaded_link_is_called_so_and_falls_short() {
+    // 30 machines on a link of 80 µs per byte: 30 × 10 × 80 µs = 24 ms of link per 2.3 ms.
+    // A new board knits its local pattern until its ring covers a row (30 × 200 items at
+    // 0.8 ms: about 5 s); then the link cannot keep up: grants come late, and every machine
+    // knits most of its rows from its local pattern (or patched after underruns).
+    let r = json(&["--seconds", "8", "--machines", "30", "--byte-ns", "80000"]);
     assert_eq!(r["capacity"]["schedulable"], false);
-    assert!(total(&r, "underruns") > 0);
+    assert!(total(&r, "missed_deadlines") > 0);
+    for m in machines(&r) {
+        let rows = m["rows"].as_u64().unwrap();
+        let master = m["master_rows"].as_u64().unwrap();
+        assert!(master * 2 < rows, "{m}");
+    }
     pattern_intact(&r);
 }
 

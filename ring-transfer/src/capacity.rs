@@ -170,10 +170,20 @@ pub fn check(loads: &[Load], link: LinkSpec) -> Result<Verdict, CapacityError> {
 }
 
 /// The smallest ring for slave `slave` (the others as given) that keeps the set schedulable,
-/// searching up to `max_ring`; `None` if none is.
+/// searching `2..=max_ring`; `None` if none is. Cost: O(log r) checks, r the answer (or
+/// `max_ring` when there is none) — `u32::MAX` returns as promptly as 1 000.
+///
+/// The search relies on the verdict being monotone in the ring: a ring one slot longer never
+/// turns [`Verdict::Schedulable`] into a refusal. Why: a longer ring raises only this slave's
+/// deadline `D`. Its own demand `⌊(L − D)/T⌋ + 1` falls at every `L`; the blocking term `C − 1`
+/// (one item time, the same for every slave) may newly appear at an `L` between the old and the
+/// new `D` — but only where this slave's own demand drops from at least `C` to 0, so the sum
+/// falls there too; the utilisation and the other slaves' terms do not change. (The property
+/// tests check this and compare the search with a linear scan.)
 ///
 /// # Errors
-/// As [`check`], and [`CapacityError::UnknownSlave`].
+/// As [`check`] for any ring the search tries (it tries rings from 2 upwards in doubling steps,
+/// none above `max(2·r, max_ring)`), and [`CapacityError::UnknownSlave`].
 pub fn min_ring(
     loads: &[Load],
     link: LinkSpec,
@@ -181,8 +191,7 @@ pub fn min_ring(
     max_ring: u32,
 ) -> Result<Option<u32>, CapacityError> {
     let own = *loads.get(slave).ok_or(CapacityError::UnknownSlave(slave))?;
-    // Linear from the bottom: non-pre-emptive EDF need not be monotone in one deadline.
-    for ring in 2..=max_ring {
+    let fits = |ring: u32| -> Result<bool, CapacityError> {
         let verdict = check_by(
             loads.len(),
             |i| {
@@ -194,36 +203,59 @@ pub fn min_ring(
             },
             link,
         )?;
-        if verdict.is_schedulable() {
-            return Ok(Some(ring));
-        }
-    }
-    Ok(None)
-}
-
-/// The most identical slaves (`load` each, up to `limit`) one link can serve: the source's
-/// "one master can serve 80+".
-///
-/// # Errors
-/// As [`check`].
-pub fn max_slaves(load: Load, link: LinkSpec, limit: usize) -> Result<usize, CapacityError> {
-    let fits = |n: usize| -> Result<bool, CapacityError> {
-        Ok(n == 0 || check_by(n, |_| Some(load), link)?.is_schedulable())
+        Ok(verdict.is_schedulable())
     };
-    // More identical slaves never need less: binary search on the largest n that fits.
-    let (mut good, mut bad) = (0usize, limit.saturating_add(1));
-    if fits(limit)? {
-        return Ok(limit);
+    if max_ring < 2 {
+        return Ok(None);
     }
-    while bad.saturating_sub(good) > 1 {
-        let mid = good.saturating_add(bad.saturating_sub(good) / 2);
+    // Galloping from the bottom, so that no ring far above the answer is tried (a check's cost
+    // grows with the ring): `bad` does not fit, `good` does.
+    let (mut bad, mut step) = (1u32, 1u32);
+    let mut good = loop {
+        let probe = bad.saturating_add(step).min(max_ring);
+        if fits(probe)? {
+            break probe;
+        }
+        if probe == max_ring {
+            return Ok(None);
+        }
+        bad = probe;
+        step = step.saturating_mul(2);
+    };
+    while good.saturating_sub(bad) > 1 {
+        let mid = bad.saturating_add(good.saturating_sub(bad) >> 1);
         if fits(mid)? {
             good = mid;
         } else {
             bad = mid;
         }
     }
-    Ok(good)
+    Ok(Some(good))
+}
+
+/// The most identical slaves (`load` each, up to `limit`) one link can serve: the source's
+/// "one master can serve 80+". The largest `n ≤ limit` for which [`check`] of `n` copies of
+/// `load` is schedulable (0 if none is). O(1): for identical slaves every deadline is the same,
+/// so the test reduces to the ring check and `n·item_time ≤ t0`.
+///
+/// # Errors
+/// As [`check`] of one such slave (none for `limit` = 0).
+pub fn max_slaves(load: Load, link: LinkSpec, limit: usize) -> Result<usize, CapacityError> {
+    if limit == 0 {
+        return Ok(0);
+    }
+    if link.item_time == 0 {
+        return Err(CapacityError::ZeroItemTime);
+    }
+    if load.t0 == 0 {
+        return Err(CapacityError::ZeroRate { slave: 0 });
+    }
+    if deadline(load, link)?.is_none() {
+        return Ok(0);
+    }
+    // n·C ≤ T: the exact utilisation bound (no deadline points: all deadlines are equal).
+    let most = load.t0.checked_div(link.item_time).unwrap_or(0);
+    Ok(usize::try_from(most).map_or(limit, |m| m.min(limit)))
 }
 
 /// A non-negative fraction in lowest terms.
@@ -250,6 +282,14 @@ impl Fraction {
             den: den_total.checked_div(g)?,
         })
     }
+}
+
+/// `⌈a/b⌉`, `a` for `b` = 0 (never asked: rates are checked first). `u128::div_ceil` would
+/// keep a division-by-zero panic path in the firmware.
+fn div_ceil(a: u128, b: u128) -> u128 {
+    let q = a.checked_div(b).unwrap_or(a);
+    let r = a.checked_rem(b).unwrap_or(0);
+    q.saturating_add(u128::from(r != 0))
 }
 
 fn gcd(mut a: u128, mut b: u128) -> u128 {
@@ -287,7 +327,7 @@ fn check_by(
         if l.t0 == 0 {
             return Err(CapacityError::ZeroRate { slave: i });
         }
-        let share = (u128::from(c) << 64).div_ceil(u128::from(l.t0));
+        let share = div_ceil(u128::from(c) << 64, u128::from(l.t0));
         rounded_up = rounded_up.saturating_add(share);
         exact = exact.and_then(|sum| sum.add(u128::from(c), u128::from(l.t0)));
         match deadline(l, link)? {
@@ -309,7 +349,8 @@ fn check_by(
     for i in 0..n {
         let l = load(i).ok_or(CapacityError::UnknownSlave(i))?;
         let d = deadline(l, link)?.ok_or(CapacityError::Overflow)?;
-        points = points.saturating_add(d_max.saturating_sub(d).div_ceil(l.t0));
+        let periods = div_ceil(u128::from(d_max.saturating_sub(d)), u128::from(l.t0));
+        points = points.saturating_add(u64::try_from(periods).unwrap_or(u64::MAX));
     }
     if points > MAX_POINTS {
         return Err(CapacityError::TooComplex { points });

@@ -12,12 +12,20 @@
 //!   an item only if its index is the next one it expects, so an item that arrives twice is not
 //!   consumed twice and one that arrives early (after a loss) is not taken out of order.
 //!
+//! **Sessions.** Every report carries the board's **boot number** (a value its firmware changes
+//! at every start). A board that has just started has no place in the stream: its reports carry
+//! the **hello** flag, and the master answers with refills flagged **sync** that carry the same
+//! boot number and start where the previous board stopped; the board takes its counters from
+//! the first such refill. A report whose boot number is not the current session's is ignored, so
+//! a late or repeated report of the board before a reboot is never taken for the new board; a
+//! sync refill for another boot number is never taken by the new board.
+//!
 //! Frames (all integers little-endian, CRC-16/CCITT-FALSE over everything before it):
 //!
 //! | frame | bytes |
 //! |---|---|
-//! | report | `0xA5`, slave, consumed (2), received (2), flags, CRC (2) — 9 bytes; flags bit 0 = stand-alone, bit 1 = retry, others 0 |
-//! | refill | `0x5A`, slave, first index (2), count n (0..=[`MAX_REFILL`]), n items, CRC (2) — 7 + n bytes; n = 0 is a keep-alive |
+//! | report | `0xA5`, slave, consumed (2), received (2), flags, boot, CRC (2) — 10 bytes; flags bit 0 = stand-alone, bit 1 = retry, bit 2 = hello, others 0 |
+//! | refill | `0x5A`, slave, first index (2), flags, boot, count n (0..=[`MAX_REFILL`]), n items, CRC (2) — 9 + n bytes; flags bit 0 = sync, others 0; n = 0 is a keep-alive |
 //!
 //! The CRC detects every error of up to 3 bits in a frame of this size and every burst of up to
 //! 16 bits.
@@ -25,7 +33,7 @@
 use core::fmt;
 
 /// Bytes in a report frame.
-pub const REPORT_LEN: usize = 9;
+pub const REPORT_LEN: usize = 10;
 /// The most items one refill frame carries.
 pub const MAX_REFILL: usize = 64;
 /// Bytes in the longest frame (a full refill).
@@ -33,10 +41,12 @@ pub const MAX_FRAME: usize = REFILL_OVERHEAD + MAX_REFILL;
 
 const REPORT_TAG: u8 = 0xA5;
 const REFILL_TAG: u8 = 0x5A;
-const REFILL_HEADER: usize = 5;
+const REFILL_HEADER: usize = 7;
 const REFILL_OVERHEAD: usize = REFILL_HEADER + 2;
 const FLAG_STANDALONE: u8 = 0x01;
 const FLAG_RETRY: u8 = 0x02;
+const FLAG_HELLO: u8 = 0x04;
+const FLAG_SYNC: u8 = 0x01;
 
 /// A slave's request: where it stands, as cumulative wrapping counts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -54,6 +64,12 @@ pub struct Report {
     /// The slave has waited for a refill longer than its retry time, or saw a gap: the master
     /// should send again from `received`.
     pub retry: bool,
+    /// The board's boot number ([`SlaveConfig::boot`](crate::SlaveConfig::boot)): reports of
+    /// another boot than the master's current session are ignored.
+    pub boot: u8,
+    /// The board has just started and has no place in the stream yet (its counters mean
+    /// nothing): the master starts a new session and answers with sync refills.
+    pub hello: bool,
 }
 
 /// The master's refill: items of the stream, starting at index `first`.
@@ -66,6 +82,25 @@ pub struct Refill<'a> {
     pub first: u16,
     /// Up to [`MAX_REFILL`] items; none is a keep-alive ("the master is here").
     pub items: &'a [u8],
+    /// The boot number of the session this refill belongs to (for a sync refill: the board
+    /// that said hello).
+    pub boot: u8,
+    /// A refill of a new session: `first` is where the board with boot number `boot` starts.
+    pub sync: bool,
+}
+
+impl Refill<'static> {
+    /// An empty refill ("the master is here"), the answer to a report when nothing is owed.
+    #[must_use]
+    pub const fn keep_alive(slave: u8) -> Self {
+        Self {
+            slave,
+            first: 0,
+            items: &[],
+            boot: 0,
+            sync: false,
+        }
+    }
 }
 
 /// A decoded frame.
@@ -103,7 +138,7 @@ pub enum DecodeError {
         /// The CRC of the bytes received.
         computed: u16,
     },
-    /// A report's flag byte has bits set that mean nothing.
+    /// A flag byte has bits set that mean nothing.
     ReservedFlags(u8),
 }
 
@@ -124,7 +159,7 @@ impl fmt::Display for DecodeError {
                     "CRC mismatch: frame carries {carried:#06x}, bytes give {computed:#06x}"
                 )
             }
-            Self::ReservedFlags(flags) => write!(f, "report flags {flags:#04x} use reserved bits"),
+            Self::ReservedFlags(flags) => write!(f, "frame flags {flags:#04x} use reserved bits"),
         }
     }
 }
@@ -184,7 +219,7 @@ fn seal(frame: &mut [u8]) -> Option<()> {
 }
 
 impl Report {
-    /// Writes the 9-byte frame into `out`; returns its length.
+    /// Writes the 10-byte frame into `out`; returns its length.
     ///
     /// # Errors
     /// [`EncodeError::BufferTooSmall`] when `out` is shorter than [`REPORT_LEN`].
@@ -205,7 +240,12 @@ impl Report {
         if self.retry {
             flags |= FLAG_RETRY;
         }
-        frame.copy_from_slice(&[REPORT_TAG, self.slave, c0, c1, r0, r1, flags, 0, 0]);
+        if self.hello {
+            flags |= FLAG_HELLO;
+        }
+        frame.copy_from_slice(&[
+            REPORT_TAG, self.slave, c0, c1, r0, r1, flags, self.boot, 0, 0,
+        ]);
         seal(frame).map_or(
             Err(EncodeError::BufferTooSmall {
                 needed: REPORT_LEN,
@@ -217,7 +257,7 @@ impl Report {
 }
 
 impl Refill<'_> {
-    /// Writes the frame (7 + items bytes) into `out`; returns its length.
+    /// Writes the frame (9 + items bytes) into `out`; returns its length.
     ///
     /// # Errors
     /// [`EncodeError::TooManyItems`] for more than [`MAX_REFILL`] items,
@@ -234,7 +274,8 @@ impl Refill<'_> {
             .ok_or(EncodeError::BufferTooSmall { needed, got })?;
         let [f0, f1] = self.first.to_le_bytes();
         let (header, rest) = frame.split_at_mut(REFILL_HEADER);
-        header.copy_from_slice(&[REFILL_TAG, self.slave, f0, f1, count]);
+        let flags = if self.sync { FLAG_SYNC } else { 0 };
+        header.copy_from_slice(&[REFILL_TAG, self.slave, f0, f1, flags, self.boot, count]);
         let (items, _crc) = rest.split_at_mut(self.items.len());
         items.copy_from_slice(self.items);
         seal(frame).map_or(Err(EncodeError::BufferTooSmall { needed, got }), |()| {
@@ -293,8 +334,8 @@ pub fn decode(bytes: &[u8]) -> Result<Message<'_>, DecodeError> {
         return Err(DecodeError::Checksum { carried, computed });
     }
     match *body {
-        [REPORT_TAG, slave, c0, c1, r0, r1, flags] => {
-            if flags & !(FLAG_STANDALONE | FLAG_RETRY) != 0 {
+        [REPORT_TAG, slave, c0, c1, r0, r1, flags, boot] => {
+            if flags & !(FLAG_STANDALONE | FLAG_RETRY | FLAG_HELLO) != 0 {
                 return Err(DecodeError::ReservedFlags(flags));
             }
             Ok(Message::Report(Report {
@@ -303,13 +344,31 @@ pub fn decode(bytes: &[u8]) -> Result<Message<'_>, DecodeError> {
                 received: u16::from_le_bytes([r0, r1]),
                 standalone: flags & FLAG_STANDALONE != 0,
                 retry: flags & FLAG_RETRY != 0,
+                boot,
+                hello: flags & FLAG_HELLO != 0,
             }))
         }
-        [REFILL_TAG, slave, f0, f1, _count, ref items @ ..] => Ok(Message::Refill(Refill {
+        [
+            REFILL_TAG,
             slave,
-            first: u16::from_le_bytes([f0, f1]),
-            items,
-        })),
+            f0,
+            f1,
+            flags,
+            boot,
+            _count,
+            ref items @ ..,
+        ] => {
+            if flags & !FLAG_SYNC != 0 {
+                return Err(DecodeError::ReservedFlags(flags));
+            }
+            Ok(Message::Refill(Refill {
+                slave,
+                first: u16::from_le_bytes([f0, f1]),
+                items,
+                boot,
+                sync: flags & FLAG_SYNC != 0,
+            }))
+        }
         _ => Err(DecodeError::Length {
             expected,
             got: bytes.len(),
@@ -335,6 +394,8 @@ mod tests {
             received: 3,
             standalone: true,
             retry: false,
+            boot: 200,
+            hello: true,
         };
         let mut buf = [0; MAX_FRAME];
         let n = report.encode(&mut buf).unwrap();
@@ -344,15 +405,13 @@ mod tests {
             slave: 2,
             first: 40_000,
             items: &items,
+            boot: 17,
+            sync: true,
         };
         let n = refill.encode(&mut buf).unwrap();
-        assert_eq!(n, 11);
+        assert_eq!(n, 13);
         assert_eq!(decode(&buf[..n]), Ok(Message::Refill(refill)));
-        let keep_alive = Refill {
-            slave: 2,
-            first: 0,
-            items: &[],
-        };
+        let keep_alive = Refill::keep_alive(2);
         let n = keep_alive.encode(&mut buf).unwrap();
         assert_eq!(decode(&buf[..n]), Ok(Message::Refill(keep_alive)));
     }
@@ -365,19 +424,19 @@ mod tests {
         assert_eq!(
             decode(&[REPORT_TAG, 1]),
             Err(DecodeError::Length {
-                expected: 9,
+                expected: 10,
                 got: 2
             })
         );
         assert_eq!(
             decode(&[REFILL_TAG, 1, 0]),
             Err(DecodeError::Length {
-                expected: 7,
+                expected: 9,
                 got: 3
             })
         );
         assert_eq!(
-            decode(&[REFILL_TAG, 1, 0, 0, 65]),
+            decode(&[REFILL_TAG, 1, 0, 0, 0, 0, 65]),
             Err(DecodeError::TooManyItems(65))
         );
         let n = Report {
@@ -386,6 +445,8 @@ mod tests {
             received: 3,
             standalone: false,
             retry: true,
+            boot: 0,
+            hello: false,
         }
         .encode(&mut buf)
         .unwrap();
@@ -396,28 +457,31 @@ mod tests {
         ));
         buf[2] ^= 0x10;
         buf[6] = 0x80;
-        let crc = crc16(&buf[..7]).to_le_bytes();
-        buf[7..9].copy_from_slice(&crc);
+        let crc = crc16(&buf[..8]).to_le_bytes();
+        buf[8..10].copy_from_slice(&crc);
         assert_eq!(decode(&buf[..n]), Err(DecodeError::ReservedFlags(0x80)));
+        let n = Refill::keep_alive(1).encode(&mut buf).unwrap();
+        buf[4] = 0x02;
+        let crc = crc16(&buf[..n - 2]).to_le_bytes();
+        buf[n - 2..n].copy_from_slice(&crc);
+        assert_eq!(decode(&buf[..n]), Err(DecodeError::ReservedFlags(0x02)));
         assert_eq!(
             Refill {
-                slave: 0,
-                first: 0,
-                items: &[0; 65]
+                items: &[0; 65],
+                ..Refill::keep_alive(0)
             }
             .encode(&mut buf),
             Err(EncodeError::TooManyItems(65))
         );
         assert_eq!(
             Refill {
-                slave: 0,
-                first: 0,
-                items: &[0; 4]
+                items: &[0; 4],
+                ..Refill::keep_alive(0)
             }
-            .encode(&mut buf[..10]),
+            .encode(&mut buf[..12]),
             Err(EncodeError::BufferTooSmall {
-                needed: 11,
-                got: 10
+                needed: 13,
+                got: 12
             })
         );
     }
@@ -432,6 +496,8 @@ mod tests {
             received: 770,
             standalone: false,
             retry: false,
+            boot: 3,
+            hello: false,
         }
         .encode(&mut frames[0].0)
         .unwrap();
@@ -439,6 +505,8 @@ mod tests {
             slave: 9,
             first: 1234,
             items: &[0xAA, 0x55, 0, 0xFF],
+            boot: 3,
+            sync: true,
         }
         .encode(&mut frames[1].0)
         .unwrap();

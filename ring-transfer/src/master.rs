@@ -3,7 +3,7 @@
 use core::fmt;
 
 use crate::edf::Edf;
-use crate::link::Report;
+use crate::link::{Refill, Report};
 
 /// What the master must know of a slave: its ring size and how fast it consumes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -55,8 +55,10 @@ pub enum ReportOutcome {
         /// Items the slave has room for and the master has not yet sent.
         owed: u32,
     },
-    /// Older than, or the same as, a report already seen (a late or repeated message): ignored.
-    /// (A stand-alone slave's periodic report is never stale: it asks for a keep-alive.)
+    /// Older than, or the same as, a report already seen (a late or repeated message), or a
+    /// report of another boot than the current session's (the board before a reboot): ignored.
+    /// A stand-alone report of the current session is stale only if it is older than the
+    /// newest: the same counters again ask for a keep-alive and are accepted.
     Stale,
 }
 
@@ -74,9 +76,16 @@ pub struct Grant {
     /// The deadline this grant served (the source's `slack · t0` after the slave's report).
     pub deadline: u64,
     /// `true` when the grant came after its deadline: the slave may underrun. Counted in
-    /// [`SlaveStatus::missed`]. Never set while a slave is being filled after attach (it has
-    /// reported no consumption yet: its machine has not started).
+    /// [`SlaveStatus::missed`]. Never set while a slave is being filled after attach or after
+    /// a hello (it has reported no consumption yet: its machine has not started).
     pub late: bool,
+    /// The boot number of the session (the board's, from its reports).
+    pub boot: u8,
+    /// The board has said hello, has not yet reported from its new place, and this grant
+    /// starts where the session starts: the refill must be sent as a sync refill, which places
+    /// the board at `first`. (If it is lost, the board says hello again and the master starts
+    /// the session again from the same place.)
+    pub sync: bool,
 }
 
 impl Grant {
@@ -85,6 +94,19 @@ impl Grant {
     pub fn first_wire(&self) -> u16 {
         low16(self.first)
     }
+
+    /// The refill frame for this grant, carrying `items` (the stream's items from `first`),
+    /// to the slave at link address `address`.
+    #[must_use]
+    pub fn refill<'a>(&self, address: u8, items: &'a [u8]) -> Refill<'a> {
+        Refill {
+            slave: address,
+            first: self.first_wire(),
+            items,
+            boot: self.boot,
+            sync: self.sync,
+        }
+    }
 }
 
 /// One slave as the master sees it.
@@ -92,7 +114,8 @@ impl Grant {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SlaveStatus {
-    /// Attached and heard from at least once.
+    /// The slave's newest report says it takes the master's stream: it is placed in the
+    /// current session (not saying hello) and not stand-alone.
     pub linked: bool,
     /// Items owed now.
     pub owed: u32,
@@ -116,6 +139,11 @@ pub struct SlaveStatus {
     pub received: u64,
     /// Stream items granted (the next index to send).
     pub sent: u64,
+    /// Hellos with a boot number other than the session's: the board restarted (a power
+    /// cycle, a watchdog) and was placed again where the board before it stopped.
+    pub reboots: u32,
+    /// The current session's boot number.
+    pub boot: u8,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -123,8 +151,12 @@ struct Link {
     params: Option<SlaveParams>,
     status: SlaveStatus,
     report_at: u64,
-    /// The consumed count of the first report after attach.
+    /// The consumed count of the first report after attach, or where the session started.
     first_consumed: u64,
+    /// A report has been accepted since attach: the counters mean something.
+    heard: bool,
+    /// The board said hello and has not reported from its place yet: grants are sync grants.
+    syncing: bool,
 }
 
 impl Link {
@@ -143,9 +175,13 @@ impl Link {
             consumed: 0,
             received: 0,
             sent: 0,
+            reboots: 0,
+            boot: 0,
         },
         report_at: 0,
         first_consumed: 0,
+        heard: false,
+        syncing: false,
     };
 
     fn owed(&self) -> u32 {
@@ -161,7 +197,7 @@ impl Link {
     /// consumed` items at its last report; the next one is due that many periods after it.
     fn deadline(&self) -> Option<u64> {
         let params = self.params?;
-        if !self.status.linked || self.owed() == 0 {
+        if !self.heard || self.owed() == 0 {
             return None;
         }
         let ahead = self.status.sent.saturating_sub(self.status.consumed);
@@ -197,7 +233,7 @@ fn extend(known: u64, wire: u16) -> Option<u64> {
 /// master.attach(0, SlaveParams { capacity: 256, t0: 2_300 })?; // µs per needle
 /// master.attach(1, SlaveParams { capacity: 64, t0: 2_100 })?;
 /// let report = |slave: u8, consumed, received| {
-///     Report { slave, consumed, received, standalone: false, retry: false }
+///     Report { slave, consumed, received, standalone: false, retry: false, boot: 0, hello: false }
 /// };
 /// // Both start empty and are filled.
 /// for slave in 0..2 {
@@ -292,11 +328,20 @@ impl<const S: usize> Master<S> {
     }
 
     /// Takes a slave's report received at `now`. The first report after `attach` sets the
-    /// counters; after that a report counts only if it is newer than every one before it, so
-    /// any pattern of lost, repeated and reordered reports leaves the master owing exactly what
-    /// the newest report says. A retry report makes the master send again from the slave's
-    /// `received` count (a refill was lost); a slave that skipped items after an underrun moves
-    /// the master past them. `report.slave` is not looked at: `slave` says who sent it.
+    /// counters; after that a report counts only if it is of the current session's boot number
+    /// and newer than every one before it, so any pattern of lost, repeated and reordered
+    /// reports leaves the master owing exactly what the newest report says. A retry report
+    /// makes the master send again from the slave's `received` count (a refill was lost); a
+    /// slave that skipped items after an underrun moves the master past them. `report.slave`
+    /// is not looked at: `slave` says who sent it.
+    ///
+    /// **A hello** (a board that has just started) starts a new session with its boot number:
+    /// the stream resumes at the newest `consumed` count this master holds for the slave (0
+    /// after attach) — the items the board before it held in its ring are sent again, nothing
+    /// is skipped; repeated are only the items that board consumed after its newest report that
+    /// reached the master. Grants are then [`Grant::sync`] until the board reports from its new
+    /// place (only the one that starts at the session's first index is a sync grant); a hello
+    /// with a new boot number counts in [`SlaveStatus::reboots`].
     ///
     /// # Errors
     /// [`MasterError::UnknownSlave`] or [`MasterError::NotAttached`].
@@ -312,7 +357,29 @@ impl<const S: usize> Master<S> {
             .get_mut(slave)
             .ok_or(MasterError::UnknownSlave(slave))?;
         let status = &mut link.status;
-        if status.linked {
+        if report.hello {
+            if link.heard && report.boot != status.boot {
+                status.reboots = status.reboots.saturating_add(1);
+            }
+            link.heard = true;
+            link.syncing = true;
+            status.boot = report.boot;
+            status.linked = false;
+            status.standalone = report.standalone;
+            status.received = status.consumed;
+            status.sent = status.consumed;
+            link.first_consumed = status.consumed;
+            status.reports = status.reports.saturating_add(1);
+            link.report_at = now;
+            let owed = link.owed();
+            self.refresh(slave);
+            return Ok(ReportOutcome::Accepted { owed });
+        }
+        if link.heard && report.boot != status.boot {
+            status.stale_reports = status.stale_reports.saturating_add(1);
+            return Ok(ReportOutcome::Stale);
+        }
+        if link.heard {
             let (Some(consumed), Some(received)) = (
                 extend(status.consumed, report.consumed),
                 extend(status.received, report.received),
@@ -328,7 +395,8 @@ impl<const S: usize> Master<S> {
             status.consumed = consumed;
             status.received = received;
         } else {
-            status.linked = true;
+            link.heard = true;
+            status.boot = report.boot;
             link.first_consumed = u64::from(report.consumed);
             status.consumed = u64::from(report.consumed);
             status.received = u64::from(report.received);
@@ -342,6 +410,8 @@ impl<const S: usize> Master<S> {
         // underrun, or a master restarted behind its slave): never send them again.
         status.sent = status.sent.max(status.received);
         status.standalone = report.standalone;
+        link.syncing = false;
+        status.linked = !report.standalone;
         status.reports = status.reports.saturating_add(1);
         link.report_at = now;
         let owed = link.owed();
@@ -380,6 +450,10 @@ impl<const S: usize> Master<S> {
         }
         let first = link.status.sent;
         link.status.sent = first.saturating_add(u64::from(count));
+        // Only the grant that starts at the session's first index places the board: a later one
+        // taken as a sync (its predecessor lost) would skip the items between.
+        let sync = link.syncing && first == link.first_consumed;
+        let boot = link.status.boot;
         self.refresh(slave);
         Some(Grant {
             slave,
@@ -387,6 +461,8 @@ impl<const S: usize> Master<S> {
             count,
             deadline,
             late,
+            boot,
+            sync,
         })
     }
 
@@ -426,6 +502,8 @@ mod tests {
             received,
             standalone: false,
             retry: false,
+            boot: 0,
+            hello: false,
         }
     }
 
@@ -556,5 +634,94 @@ mod tests {
             Ok(ReportOutcome::Accepted { owed: 4 })
         );
         assert_eq!(m.next_refill(3, 4).unwrap().first, 3);
+    }
+
+    #[test]
+    fn a_stand_alone_report_of_the_session_is_never_stale() {
+        // Any counters (near the half range and the wrap too), the same stand-alone report any
+        // number of times: accepted every time; an older one is stale.
+        for start in [0u16, 100, 32_767, 32_768, 65_535] {
+            let mut m: Master<1> = Master::new();
+            m.attach(0, SlaveParams { capacity: 8, t0: 1 }).unwrap();
+            m.on_report(0, 0, &report(start, start)).unwrap();
+            let alone = Report {
+                standalone: true,
+                ..report(start.wrapping_add(5), start.wrapping_add(8))
+            };
+            for now in 1..5 {
+                assert_eq!(
+                    m.on_report(now, 0, &alone),
+                    Ok(ReportOutcome::Accepted { owed: 5 }),
+                    "start {start}"
+                );
+            }
+            let older = Report {
+                standalone: true,
+                ..report(start.wrapping_add(4), start.wrapping_add(8))
+            };
+            assert_eq!(m.on_report(6, 0, &older), Ok(ReportOutcome::Stale));
+            let s = m.status(0).unwrap();
+            assert!(
+                s.standalone && !s.linked,
+                "a stand-alone slave is not linked"
+            );
+        }
+    }
+
+    #[test]
+    fn a_hello_starts_a_session_where_the_board_before_stopped() {
+        let mut m: Master<1> = Master::new();
+        m.attach(0, SlaveParams { capacity: 8, t0: 1 }).unwrap();
+        // The board ran 40 000 items (past half the counter range) and reported them.
+        let mut at = 0u64;
+        while at < 40_000 {
+            at += 10_000;
+            m.on_report(0, 0, &report(at as u16, at as u16)).unwrap();
+        }
+        while m.next_refill(0, 64).is_some() {}
+        assert!(m.status(0).unwrap().linked);
+        let hello = Report {
+            boot: 1,
+            hello: true,
+            standalone: true,
+            ..report(0, 0)
+        };
+        assert_eq!(
+            m.on_report(1, 0, &hello),
+            Ok(ReportOutcome::Accepted { owed: 8 })
+        );
+        let s = m.status(0).unwrap();
+        assert_eq!((s.reboots, s.boot, s.linked), (1, 1, false));
+        let g = m.next_refill(1, 3).unwrap();
+        assert_eq!(
+            (g.first, g.count, g.sync, g.boot, g.late),
+            (40_000, 3, true, 1, false)
+        );
+        let g = m.next_refill(1, 3).unwrap();
+        assert_eq!(
+            (g.first, g.sync),
+            (40_003, false),
+            "only the first grant places the board"
+        );
+        // A late report of the board before the reboot is ignored, so is a late hello's copy
+        // counted once.
+        assert_eq!(
+            m.on_report(2, 0, &report(40_005, 40_008)),
+            Ok(ReportOutcome::Stale)
+        );
+        m.on_report(2, 0, &hello).unwrap();
+        assert_eq!(m.status(0).unwrap().reboots, 1);
+        // The board reports from its place: linked.
+        let placed = Report {
+            boot: 1,
+            ..report(40_001, 40_003)
+        };
+        assert_eq!(
+            m.on_report(3, 0, &placed),
+            Ok(ReportOutcome::Accepted { owed: 6 })
+        );
+        let s = m.status(0).unwrap();
+        assert!(s.linked);
+        assert_eq!(s.consumed, 40_001);
     }
 }

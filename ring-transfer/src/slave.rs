@@ -17,8 +17,14 @@ pub struct SlaveConfig {
     /// Steps without a frame from the master after which it counts as silent (≥ 1).
     pub silence_limit: u32,
     /// Steps a slave owed items waits without a refill before it reports again with the retry
-    /// flag (≥ 1).
+    /// flag (≥ 1); also the period of its reports while stand-alone or saying hello.
     pub retry_after: u32,
+    /// The board's boot number: a value the firmware changes at every start (a counter kept in
+    /// flash or a backup register, or a random byte). The master tells a rebooted board by it
+    /// and ignores late reports of the board before the reboot; a board that starts with the
+    /// same number as before is still placed in the stream again, but a late report of its
+    /// previous start may then be taken for its own.
+    pub boot: u8,
 }
 
 /// Why a [`SlaveConfig`] was refused.
@@ -81,7 +87,8 @@ impl core::error::Error for FrameError {}
 pub enum Mode {
     /// From the master, through the ring.
     Linked,
-    /// From the local pattern (the source's ROM or tape): the master was silent too long.
+    /// From the local pattern (the source's ROM or tape): the master was silent too long, or
+    /// has not yet placed this new slave in its stream.
     StandAlone,
 }
 
@@ -157,10 +164,23 @@ pub struct SlaveStats {
 ///   "RP ≠ SP"), again with the retry flag after `retry_after` steps without a refill, and
 ///   every `retry_after` steps while stand-alone, so the master can answer.
 ///
+/// **Starting (and restarting).** A new slave has no place in the master's stream: it runs
+/// stand-alone and its reports say **hello** (at once, then every `retry_after` steps) until a
+/// sync refill for its boot number arrives, whose first index becomes its counters. The master
+/// answers a hello where the board before it stopped (see [`Master`](crate::Master)), so a
+/// board that was power-cycled resumes the stream there. A slave that receives a sync refill
+/// for another boot number (the master took a late hello of an earlier start for the current
+/// one) says hello again, keeping its ring and counters.
+///
 /// **Stand-alone and back.** At a row boundary, a linked slave whose master is silent and whose
 /// ring cannot cover the next row switches to its local pattern (`min(row_len, N)` items cover a
-/// row: with a ring shorter than a row, a full ring). A stand-alone slave switches back at a row
-/// boundary once the master is heard again and the ring covers the next row. The master's
+/// row: with a ring shorter than a row, a full ring). A stand-alone slave switches back at the
+/// first row boundary at which it has heard the master (any valid frame for it, a keep-alive
+/// too) since it went stand-alone and the ring covers the next row. Once the master answers
+/// again, with frames delayed by at most `d` steps each way and none lost, the slave is linked
+/// again within `retry_after + 2·d + row_len + 1` steps, for every configuration
+/// [`Slave::new`] accepts (its next report, the answer, the rest of the row), given a ring of at
+/// least `4·d` slots (a ring shorter than the link's round trip underruns, outage or not). The master's
 /// stream pauses meanwhile, so the rows around a fault are whole rows of one source or the
 /// other, never a mixture. The one exception: if the ring runs dry mid-row after the master has
 /// gone silent, the rest of that row comes from the local pattern ([`Source::Fallback`]) — there
@@ -169,13 +189,17 @@ pub struct SlaveStats {
 /// ```
 /// use regler_ring_transfer::{link, Mode, Refill, Slave, SlaveConfig};
 ///
-/// let config = SlaveConfig { address: 3, row_len: 4, silence_limit: 6, retry_after: 4 };
+/// let config = SlaveConfig { address: 3, row_len: 4, silence_limit: 6, retry_after: 4, boot: 1 };
 /// let mut slave: Slave<8> = Slave::new(config)?;
 /// let rom = |_row: u32, col: u16| 0xF0 | (col as u8); // the local pattern
 ///
-/// // The master fills the ring.
+/// // The new board says hello; the master's answer places it in the stream and fills the ring.
+/// let hello = slave.poll_report().ok_or("a new board says hello")?;
+/// assert!(hello.hello);
 /// let mut frame = [0; link::MAX_FRAME];
-/// let n = Refill { slave: 3, first: 0, items: &[1, 2, 3, 4, 5, 6, 7, 8] }.encode(&mut frame)?;
+/// let items = [1, 2, 3, 4, 5, 6, 7, 8];
+/// let sync = Refill { slave: 3, first: 0, items: &items, boot: 1, sync: true };
+/// let n = sync.encode(&mut frame)?;
 /// assert_eq!(slave.on_frame(&frame[..n]), Ok(8));
 /// assert_eq!(slave.step(rom).item, 1);
 /// let report = slave.poll_report().ok_or("one consumed: a report is due")?;
@@ -201,11 +225,20 @@ pub struct Slave<const N: usize> {
     reported: Option<u16>,
     gap: bool,
     cut_short: bool,
+    /// The counters are stream positions (a sync refill for this boot has arrived).
+    placed: bool,
+    /// The master's session is this boot's (no hello needed).
+    synced: bool,
+    /// A hello has been sent since the slave last lost its session.
+    hello_sent: bool,
+    /// A valid frame for this slave arrived since it last went stand-alone.
+    heard: bool,
     stats: SlaveStats,
 }
 
 impl<const N: usize> Slave<N> {
-    /// A slave with an empty ring, linked, waiting for the master's first fill.
+    /// A slave with an empty ring, stand-alone, saying hello until the master places it in the
+    /// stream.
     ///
     /// # Errors
     /// The [`SlaveConfigError`] naming the bad field.
@@ -227,7 +260,7 @@ impl<const N: usize> Slave<N> {
             ring: Ring::new(),
             consumed: 0,
             received: 0,
-            mode: Mode::Linked,
+            mode: Mode::StandAlone,
             row: 0,
             col: 0,
             silent: 0,
@@ -235,6 +268,10 @@ impl<const N: usize> Slave<N> {
             reported: None,
             gap: false,
             cut_short: false,
+            placed: false,
+            synced: false,
+            hello_sent: false,
+            heard: false,
             stats: SlaveStats {
                 underruns: 0,
                 fallbacks: 0,
@@ -253,6 +290,9 @@ impl<const N: usize> Slave<N> {
 
     /// Takes one frame from the link; returns how many items went into the ring. Any valid
     /// frame for this slave — a keep-alive too — tells it the master is there.
+    ///
+    /// Before a sync refill for this slave's boot number has placed it in the stream, only
+    /// such a refill is taken; a sync refill for another boot number makes it say hello again.
     ///
     /// Items are taken only in stream order: one whose index is behind the next expected is a
     /// duplicate and dropped; one beyond it means something was lost — it and the rest of the
@@ -274,6 +314,25 @@ impl<const N: usize> Slave<N> {
             return Err(FrameError::NotForMe(refill.slave));
         }
         self.silent = 0;
+        self.heard = true;
+        if refill.sync {
+            if refill.boot == self.config.boot {
+                if !self.placed {
+                    self.placed = true;
+                    self.consumed = refill.first;
+                    self.received = refill.first;
+                    self.reported = None;
+                }
+                self.synced = true;
+            } else if self.synced {
+                // The master serves another start of this board: say hello again.
+                self.synced = false;
+                self.hello_sent = false;
+            }
+        }
+        if !self.placed {
+            return Ok(0);
+        }
         let mut taken = 0usize;
         let mut index = refill.first;
         for &item in refill.items {
@@ -294,7 +353,7 @@ impl<const N: usize> Slave<N> {
             }
             index = index.wrapping_add(1);
         }
-        if taken > 0 {
+        if taken > 0 && self.synced {
             self.since_report = 0;
         }
         Ok(taken)
@@ -315,9 +374,12 @@ impl<const N: usize> Slave<N> {
             match self.mode {
                 Mode::Linked if self.master_silent() && !self.ring_covers_a_row() => {
                     self.mode = Mode::StandAlone;
+                    self.heard = false;
                     self.stats.standalone_entries = self.stats.standalone_entries.saturating_add(1);
                 }
-                Mode::StandAlone if !self.master_silent() && self.ring_covers_a_row() => {
+                // "Heard since it went stand-alone", not "heard within the silence limit": the
+                // master's answers to the periodic reports may come anywhere in a row.
+                Mode::StandAlone if self.placed && self.heard && self.ring_covers_a_row() => {
                     self.mode = Mode::Linked;
                 }
                 _ => {}
@@ -381,6 +443,14 @@ impl<const N: usize> Slave<N> {
 
     /// A report to send now, if one is due (see the type's docs).
     pub fn poll_report(&mut self) -> Option<Report> {
+        if !self.synced {
+            if self.hello_sent && self.since_report < self.config.retry_after {
+                return None;
+            }
+            self.hello_sent = true;
+            self.since_report = 0;
+            return Some(self.report(false));
+        }
         let owed = self.ring.requests() > 0;
         let fresh = self.reported != Some(self.consumed);
         let waited = self.since_report >= self.config.retry_after;
@@ -399,6 +469,7 @@ impl<const N: usize> Slave<N> {
     }
 
     /// The report this slave would send now (for a status request, the source's keys 1–8).
+    /// Its counters are stream positions once the slave is placed in the stream.
     #[must_use]
     pub fn report(&self, retry: bool) -> Report {
         Report {
@@ -407,7 +478,15 @@ impl<const N: usize> Slave<N> {
             received: self.received,
             standalone: self.mode == Mode::StandAlone,
             retry,
+            boot: self.config.boot,
+            hello: !self.synced,
         }
+    }
+
+    /// `true` once a sync refill has placed this slave in the master's stream.
+    #[must_use]
+    pub fn placed(&self) -> bool {
+        self.placed
     }
 
     /// Linked or stand-alone.
@@ -457,6 +536,7 @@ mod tests {
         row_len: 4,
         silence_limit: 6,
         retry_after: 3,
+        boot: 9,
     };
 
     fn refill(slave: &mut Slave<8>, first: u16, items: &[u8]) -> Result<usize, FrameError> {
@@ -465,6 +545,8 @@ mod tests {
             slave: 1,
             first,
             items,
+            boot: 9,
+            sync: !slave.placed(),
         }
         .encode(&mut buf)
         .unwrap();
@@ -523,13 +605,23 @@ mod tests {
     #[test]
     fn an_underrun_skips_the_late_item() {
         let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
-        refill(&mut s, 0, &[10]).unwrap();
-        assert_eq!(s.step(|_, _| 0xEE).source, Source::Master);
+        refill(&mut s, 0, &[10, 11, 12, 13]).unwrap();
+        for item in 10..14 {
+            assert_eq!(
+                s.step(|_, _| 0xEE),
+                Output {
+                    item,
+                    source: Source::Master,
+                    row: 0,
+                    col: item as u16 - 10
+                }
+            );
+        }
         let out = s.step(|_, _| 0xEE);
         assert_eq!((out.item, out.source), (0xEE, Source::Underrun));
-        // Item 1 comes late: dropped; item 2 is used.
-        assert_eq!(refill(&mut s, 1, &[11, 12]), Ok(1));
-        assert_eq!(s.step(|_, _| 0xEE).item, 12);
+        // Item 4 comes late: dropped; item 5 is used.
+        assert_eq!(refill(&mut s, 4, &[14, 15]), Ok(1));
+        assert_eq!(s.step(|_, _| 0xEE).item, 15);
         assert_eq!(s.stats().underruns, 1);
     }
 
@@ -541,6 +633,8 @@ mod tests {
             slave: 2,
             first: 0,
             items: &[1],
+            boot: 9,
+            sync: true,
         }
         .encode(&mut buf)
         .unwrap();
@@ -550,11 +644,84 @@ mod tests {
         assert!(matches!(s.on_frame(&[0x5A, 1]), Err(FrameError::Decode(_))));
         assert_eq!(s.slack(), 0);
         assert_eq!(s.stats().bad_frames, 1);
+        assert!(!s.placed());
+    }
+
+    #[test]
+    fn a_new_slave_says_hello_until_a_sync_for_its_boot_places_it() {
+        let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
+        let hello = s.poll_report().unwrap();
+        assert!(hello.hello && hello.standalone);
+        assert_eq!(hello.boot, 9);
+        assert_eq!(
+            s.poll_report(),
+            None,
+            "the next hello after retry_after steps"
+        );
+        let mut buf = [0; MAX_FRAME];
+        // A plain refill, or a sync for another boot, does not place it.
+        for (boot, sync) in [(9, false), (8, true)] {
+            let n = Refill {
+                slave: 1,
+                first: 100,
+                items: &[1, 2, 3, 4],
+                boot,
+                sync,
+            }
+            .encode(&mut buf)
+            .unwrap();
+            assert_eq!(s.on_frame(&buf[..n]), Ok(0));
+            assert!(!s.placed());
+        }
+        for _ in 0..3 {
+            assert_eq!(s.step(|_, _| 0xEE).source, Source::Local);
+        }
+        assert!(s.poll_report().unwrap().hello);
+        let n = Refill {
+            slave: 1,
+            first: 100,
+            items: &[1, 2, 3, 4],
+            boot: 9,
+            sync: true,
+        }
+        .encode(&mut buf)
+        .unwrap();
+        assert_eq!(s.on_frame(&buf[..n]), Ok(4));
+        assert!(s.placed());
+        // The rest of the local row, then the master's items from index 100.
+        assert_eq!(s.step(|_, _| 0xEE).source, Source::Local);
+        assert_eq!(
+            s.step(|_, _| 0xEE),
+            Output {
+                item: 1,
+                source: Source::Master,
+                row: 1,
+                col: 0
+            }
+        );
+        let r = s.poll_report().unwrap();
+        assert!(!r.hello);
+        assert_eq!((r.consumed, r.received), (101, 104));
+        // A sync for another boot: hello again, ring and counters kept.
+        let n = Refill {
+            slave: 1,
+            first: 0,
+            items: &[],
+            boot: 7,
+            sync: true,
+        }
+        .encode(&mut buf)
+        .unwrap();
+        assert_eq!(s.on_frame(&buf[..n]), Ok(0));
+        let r = s.poll_report().unwrap();
+        assert!(r.hello);
+        assert_eq!((r.consumed, r.received, s.slack()), (101, 104, 3));
     }
 
     #[test]
     fn stand_alone_reports_and_comes_back_at_a_row_boundary() {
         let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
+        let _ = s.poll_report();
         refill(&mut s, 0, &[0, 1, 2, 3, 4, 5, 6, 7]).unwrap();
         let mut sources = Vec::new();
         for _ in 0..20 {

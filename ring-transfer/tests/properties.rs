@@ -13,8 +13,8 @@ use std::collections::VecDeque;
 use proptest::prelude::*;
 use regler_ring_transfer::capacity::{self, LinkSpec, Load, Verdict};
 use regler_ring_transfer::{
-    Master, Mode, Refill, Report, ReportOutcome, Ring, SharedRing, Slave, SlaveConfig, SlaveParams,
-    Source, link,
+    Master, Mode, Report, ReportOutcome, Ring, SharedRing, Slave, SlaveConfig, SlaveParams, Source,
+    link,
 };
 
 #[derive(Debug, Clone, Copy)]
@@ -231,6 +231,7 @@ fn run_lossy(
         row_len: 10,
         silence_limit: 1_000_000,
         retry_after: 6,
+        boot: 1,
     };
     let mut slave: Slave<32> = Slave::new(config).unwrap();
     let mut master: Master<1> = Master::new();
@@ -248,7 +249,6 @@ fn run_lossy(
     let mut frame = [0u8; link::MAX_FRAME];
     let mut items = [0u8; link::MAX_REFILL];
     let mut out = Vec::new();
-    let mut index = 0u64; // stream index of the item the machine takes next (linked mode)
     for now in 0..total {
         let perfect = now >= faulty_until;
         for f in up.arrived(now) {
@@ -261,13 +261,7 @@ fn run_lossy(
             for (k, item) in items[..n].iter_mut().enumerate() {
                 *item = (g.first + k as u64) as u8;
             }
-            let len = Refill {
-                slave: 0,
-                first: g.first_wire(),
-                items: &items[..n],
-            }
-            .encode(&mut frame)
-            .unwrap();
+            let len = g.refill(0, &items[..n]).encode(&mut frame).unwrap();
             down.send(now, &frame[..len], perfect);
         }
         for f in down.arrived(now) {
@@ -275,9 +269,11 @@ fn run_lossy(
         }
         // The machine runs every other tick (the link is faster than the machine).
         if now % 2 == 0 {
+            // The stream index of the item the machine takes next (when it takes one): the
+            // slave's consumed count (the stream is short enough not to wrap).
+            let index = u64::from(slave.report(false).consumed);
             let o = slave.step(|_, _| 0xEE);
             out.push((index, o.item, o.source));
-            index += 1;
         }
         if let Some(r) = slave.poll_report() {
             let len = r.encode(&mut frame).unwrap();
@@ -320,7 +316,7 @@ proptest! {
         // The true history: consumed ≤ received ≤ sent, both counters non-decreasing.
         let mut master: Master<1> = Master::new();
         master.attach(0, SlaveParams { capacity: CAP, t0: 3 }).unwrap();
-        let base = Report { slave: 0, consumed: start, received: start, standalone: false, retry: false };
+        let base = Report { slave: 0, consumed: start, received: start, standalone: false, retry: false, boot: 0, hello: false };
         master.on_report(0, 0, &base).unwrap();
         let mut sent = 0u64;
         let mut history = Vec::new();
@@ -334,7 +330,7 @@ proptest! {
         }
         let at = |i: usize| {
             let (c, r) = history[i];
-            Report { slave: 0, consumed: start.wrapping_add(c as u16), received: start.wrapping_add(r as u16), standalone: false, retry: false }
+            Report { slave: 0, consumed: start.wrapping_add(c as u16), received: start.wrapping_add(r as u16), standalone: false, retry: false, boot: 0, hello: false }
         };
         let mut newest: Option<usize> = None;
         for pick in picks {
@@ -381,6 +377,8 @@ fn simulate(loads: &[Load], link: LinkSpec, phases: &[u64], horizon: u64) -> (u6
             received: l.ring as u16,
             standalone: false,
             retry: false,
+            boot: 0,
+            hello: false,
         };
         master.on_report(0, i, &r).unwrap();
     }
@@ -413,6 +411,8 @@ fn simulate(loads: &[Load], link: LinkSpec, phases: &[u64], horizon: u64) -> (u6
                     received: received[i] as u16,
                     standalone: false,
                     retry: false,
+                    boot: 0,
+                    hello: false,
                 };
                 reports.push_back((now + link.latency, i, r));
             }

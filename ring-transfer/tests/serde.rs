@@ -13,6 +13,7 @@ fn value_types_round_trip() {
         row_len: 200,
         silence_limit: 100,
         retry_after: 16,
+        boot: 200,
     };
     let back: SlaveConfig = serde_json::from_str(&serde_json::to_string(&config).unwrap()).unwrap();
     assert_eq!(back, config);
@@ -23,6 +24,8 @@ fn value_types_round_trip() {
         received: 7,
         standalone: true,
         retry: false,
+        boot: 3,
+        hello: true,
     };
     let back: Report = serde_json::from_str(&serde_json::to_string(&report).unwrap()).unwrap();
     assert_eq!(back, report);
@@ -49,6 +52,8 @@ fn value_types_round_trip() {
                 received: 0,
                 standalone: false,
                 retry: false,
+                boot: 9,
+                hello: false,
             },
         )
         .unwrap();

@@ -37,6 +37,7 @@ fn run(row_len: u16, silences: &[(u64, u64)], steps: u64) -> Run {
         row_len,
         silence_limit: 12,
         retry_after: 4,
+        boot: 1,
     };
     let mut slave: Slave<RING> = Slave::new(config).unwrap();
     let mut master: Master<8> = Master::new();
@@ -60,13 +61,7 @@ fn run(row_len: u16, silences: &[(u64, u64)], steps: u64) -> Run {
                 let outcome = master.on_report(now, 5, &report).unwrap();
                 master_saw_standalone |= report.standalone;
                 if let ReportOutcome::Accepted { owed: 0 } = outcome {
-                    let n = Refill {
-                        slave: 5,
-                        first: 0,
-                        items: &[],
-                    }
-                    .encode(&mut frame)
-                    .unwrap();
+                    let n = Refill::keep_alive(5).encode(&mut frame).unwrap();
                     slave.on_frame(&frame[..n]).unwrap();
                 }
             }
@@ -79,13 +74,7 @@ fn run(row_len: u16, silences: &[(u64, u64)], steps: u64) -> Run {
             for (k, item) in items[..n].iter_mut().enumerate() {
                 *item = stream(g.first + k as u64);
             }
-            let len = Refill {
-                slave: 5,
-                first: g.first_wire(),
-                items: &items[..n],
-            }
-            .encode(&mut frame)
-            .unwrap();
+            let len = g.refill(5, &items[..n]).encode(&mut frame).unwrap();
             slave.on_frame(&frame[..len]).unwrap();
         }
         let out = slave.step(local);

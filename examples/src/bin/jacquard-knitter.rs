@@ -39,7 +39,7 @@ struct Args {
     /// Seed of the machines' speeds (120–140 rpm) and of the link's faults.
     #[arg(long, default_value_t = 1981)]
     seed: u64,
-    /// Link time per byte in nanoseconds (a refill frame is 7 bytes plus its items).
+    /// Link time per byte in nanoseconds (a refill frame is 9 bytes plus its items).
     #[arg(long, default_value_t = 3_000)]
     byte_ns: u64,
     /// Items per refill frame at most (1: the source's byte per request).

@@ -22,6 +22,7 @@ fn main() -> ! {
         row_len,
         silence_limit: 64,
         retry_after: 16,
+        boot: 1,
     };
     let Ok(mut slave) = stack("Slave::<256>::new", || Slave::<256>::new(config)) else {
         refused()
@@ -45,11 +46,7 @@ fn main() -> ! {
             for (k, item) in items.iter_mut().take(n).enumerate() {
                 *item = (grant.first as u8).wrapping_add(k as u8);
             }
-            let refill = Refill {
-                slave: 1,
-                first: grant.first_wire(),
-                items: &items[..n],
-            };
+            let refill = grant.refill(1, &items[..n]);
             if let Ok(len) = refill.encode(&mut frame) {
                 let _ = slave.on_frame(&frame[..len]);
             }
@@ -68,6 +65,8 @@ fn main() -> ! {
             slave: 1,
             first: 0,
             items: &[1, 2, 3],
+            boot: 1,
+            sync: false,
         }
         .encode(&mut buf)
         .unwrap_or(0);

@@ -1,12 +1,14 @@
 //! Arbitrary bytes as link frames: the decoder, a slave taking them, and a master taking the
 //! reports among them. No panic; a frame that decodes encodes back to the same bytes; the
 //! slave's ring never holds more than its capacity and its reports say so; a non-master item is
-//! the local pattern's; the master never owes more than the ring holds.
+//! the local pattern's, and a master item comes only from a slave a sync refill placed; the
+//! master never owes more than the ring holds, ignores a report of another boot than its
+//! session's, and resumes a session started by a hello where the newest report left it.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use regler_ring_transfer::{
-    Master, Message, Slave, SlaveConfig, SlaveParams, Source, decode, link,
+    Master, Message, ReportOutcome, Slave, SlaveConfig, SlaveParams, Source, decode, link,
 };
 
 fuzz_target!(|data: &[u8]| {
@@ -15,6 +17,7 @@ fuzz_target!(|data: &[u8]| {
         row_len: 5,
         silence_limit: 8,
         retry_after: 3,
+        boot: 1,
     }) else {
         return;
     };
@@ -44,9 +47,21 @@ fuzz_target!(|data: &[u8]| {
             Ok(Message::Report(report)) => {
                 let n = report.encode(&mut buf).expect("a report fits");
                 assert_eq!(&buf[..n], frame, "report re-encodes");
-                let _ = master.on_report(now, 1, &report);
-                if let Ok(status) = master.status(1) {
-                    assert!(status.owed <= 16);
+                let before = master.status(1).expect("attached");
+                let outcome = master.on_report(now, 1, &report).expect("attached");
+                let after = master.status(1).expect("attached");
+                assert!(after.owed <= 16);
+                if !report.hello && before.reports > 0 && report.boot != before.boot {
+                    assert_eq!(outcome, ReportOutcome::Stale, "a report of another boot");
+                    assert_eq!(after, before);
+                }
+                if report.hello {
+                    assert!(!after.linked);
+                    assert_eq!(after.consumed, before.consumed, "resumes where it was");
+                    assert_eq!(
+                        (after.received, after.sent),
+                        (after.consumed, after.consumed)
+                    );
                 }
                 let _ = master.next_refill(now, 4);
             }
@@ -58,7 +73,11 @@ fuzz_target!(|data: &[u8]| {
         }
         let _ = slave.on_frame(frame);
         assert!(slave.slack() <= 16);
+        let placed = slave.placed();
         let out = slave.step(|_, col| 0xF0 | col as u8);
+        if out.source == Source::Master {
+            assert!(placed, "a master item from a slave no sync placed");
+        }
         // A step from the ring shrinks it; any other source leaves it alone.
         if out.source != Source::Master {
             assert_eq!(out.item, 0xF0 | out.col as u8);
