@@ -298,7 +298,11 @@ struct Motor {
 
 impl Motor {
     fn new(at: f64, gt: f64) -> Self {
-        Motor { base: at, gt, seconds: (0.0, 0.0) }
+        Motor {
+            base: at,
+            gt,
+            seconds: (0.0, 0.0),
+        }
     }
 
     fn at(&self) -> f64 {
@@ -387,22 +391,24 @@ fn extreme_config<F: regler_pid::Real>() -> impl Strategy<Value = ActuatorConfig
         0usize..3,
         0.0f64..0.05,
     )
-        .prop_map(|(log_h, log_gt_in_h, pulse_kind, pulse_frac, band_kind, band)| {
-            let f = F::from_f64_nearest;
-            let h = 10f64.powf(log_h);
-            let run_time = h * 10f64.powf(log_gt_in_h);
-            let min_pulse = match pulse_kind {
-                0 => 0.0,
-                1 => h,
-                _ => h * pulse_frac,
-            };
-            ActuatorConfig {
-                run_time: f(run_time),
-                min_pulse: f(min_pulse),
-                dead_band: f(if band_kind == 0 { 0.0 } else { band }),
-                h: f(h),
-            }
-        })
+        .prop_map(
+            |(log_h, log_gt_in_h, pulse_kind, pulse_frac, band_kind, band)| {
+                let f = F::from_f64_nearest;
+                let h = 10f64.powf(log_h);
+                let run_time = h * 10f64.powf(log_gt_in_h);
+                let min_pulse = match pulse_kind {
+                    0 => 0.0,
+                    1 => h,
+                    _ => h * pulse_frac,
+                };
+                ActuatorConfig {
+                    run_time: f(run_time),
+                    min_pulse: f(min_pulse),
+                    dead_band: f(if band_kind == 0 { 0.0 } else { band }),
+                    h: f(h),
+                }
+            },
+        )
 }
 
 /// One request: a position (positional form), a change (velocity form), a non-finite value, or
@@ -503,7 +509,7 @@ proptest! {
             ..Config::default()
         };
         let mut pid: Pid<f64> = Pid::new(&pid_config).unwrap();
-        pid.set_manual(start);
+        let _ = pid.set_manual(start);
         let _ = pid.update(0.5, 0.5);
         pid.set_auto();
         let mut last = start;
