@@ -20,31 +20,61 @@
 //! (an `f32` clock `t += h` stops advancing): in `f32` and `f64` it gives up at the same sample,
 //! ⌊timeout/h⌋ + 1 (when timeout/h is exact in both; a time-out of more than 2⁶⁴ samples is
 //! refused), and a period is a difference of counts however late the oscillation starts.
-//! [`Relay::hand_over`] refuses a controller whose [`Action`] is not the experiment's.
+//! [`Relay::hand_over`] refuses a controller whose [`Action`] is not the experiment's, and a
+//! set-point or measurement that is not finite (naming which). The relay never returns a
+//! non-finite Ku: √(a² − ε²) is computed as a·√(1 − (ε/a)²) (no underflow at a = 10⁻²³ in
+//! `f32`), and a Ku that still overflows is [`RelayError::AmplitudeUnmeasurable`].
 //!
 //! # What the step identification accepts and how close it gets
 //! Tested in `tests/tuning.rs` (property over K of either sign from 0.01 to 100, T from 0.1 to
 //! 100 s, L from 0 to 3T, 30 to 3 000 samples per T + L, logs reaching 8 to 20 time constants
-//! past the dead time, any baseline and step, uniform noise of peak up to 2 % of the change
-//! with 20 to 500 samples before the step, in `f64` and `f32`; and logs of 0.7 and 3 million
-//! samples): K is within 1 % + ν and T and L within 2 % of T + L, plus h, plus ν·(T + L), where
-//! ν is the noise's peak as a fraction of the change. Without samples before the step the
-//! baseline is one sample and its noise enters the model unaveraged (tested noise-free only).
+//! past the dead time, a baseline within 10⁴ × the change in `f64` and 10³ × in `f32` (the
+//! change then spans at least 8 000 ulps of the samples: a change of 80 ulps rounds every
+//! sample by 0.6 % of it), uniform noise of peak up to 2 % of the change with 20 to 500 samples
+//! before the step, corners drawn on purpose, 5 000 cases run once and 20 000 noise seeds at
+//! the corners; and logs of 0.7 and 3 million samples): K is within 1 % + ν, and T and L
+//! within 2 % of T + L, plus h, plus ν·(T + L + 10·D/√N), where ν is the noise's peak as a
+//! fraction of the change, D the log's length from the step and N its number of samples from
+//! the step (the final value is a mean over the last tenth, and its error counts over the
+//! whole log). Without samples before the step the baseline is one sample and its noise
+//! enters the model unaveraged (tested noise-free only).
 //!
-//! The response is refused, never fitted, when (with "noise" the larger of the largest
-//! deviations from the mean before the step and in the last tenth):
-//! - it has not settled: the last tenth's first and last thirds differ by more than 2 % of the
-//!   change ([`IdentifyError::NotSettled`]; an integrating process's ramp ends here);
+//! A noise-free first-order log shorter than that (1 to 8 T past the dead time, tested) is
+//! refused when shorter than 5 T and otherwise gives K within 1 % and T and L within 4 % of
+//! T + L plus h. A noisy log shorter than 8 T can pass with K off by more: log at least 8 T.
+//!
+//! The response is refused, never fitted, when — with "noise" the largest deviation from the
+//! mean of the samples before the step when there are 20 or more of them (a process still
+//! oscillating at the end of the log is not its own noise), otherwise the larger of that and
+//! half the largest change between neighbouring samples of the last tenth:
+//! - it has not settled: the mean of the last tenth differs from the mean of the tenth before
+//!   by more than 0.2 % of the change plus 4·noise/√(samples in a tenth)
+//!   ([`IdentifyError::NotSettled`]; an integrating process's ramp ends here);
 //! - the change is within twice the noise ([`IdentifyError::NoResponse`]);
-//! - it rises above its final level (the last thirtieth's mean) by more than 1 % of the change
+//! - it rises above its final level (the last tenth's mean) by more than 1 % of the change
 //!   plus twice the noise ([`IdentifyError::Overshoot`]: an underdamped or oscillating
 //!   response), or first goes the wrong way by as much ([`IdentifyError::Undershoot`]: an
 //!   inverse response);
-//! - the fitted T is not positive or L is below −h ([`IdentifyError::NotFopdt`]).
+//! - the fitted T is not positive or L is below minus the tolerance above
+//!   ([`IdentifyError::NotFopdt`]);
+//! - the change, the gain change/step or T + L overflow the float type
+//!   ([`IdentifyError::Overflow`]).
 //!
 //! Tested: second-order responses with an overshoot of 2 % or more, inverse responses that go
-//! the wrong way by 2 % or more, sustained oscillations of 2 % or more and integrating
-//! processes, with noise up to 0.2 % of the change, all give an error.
+//! the wrong way by 2 % or more, and integrating processes, with noise up to 0.2 % of the
+//! change, all give an error; so does a first-order response with an oscillation of 2 % to
+//! 50 % of the change still going at the end of the log, of any period from 6 samples up to a
+//! third of the last tenth with 20 or more samples before the step, and from 32 samples
+//! without them (a faster oscillation then reads as noise).
+//!
+//! # Tuning rules and the sample period
+//! Every rule's `Ok` has K and Ti finite and positive and Td finite and not negative; a result
+//! that overflows or vanishes is [`RuleError::Result`]. AMIGO and SIMC need a dead time, and
+//! a sampled controller adds h/2 of it: tune from [`Fopdt::with_sampling_delay`]. A model with a
+//! dead time far below h (a pure lag fitted with L ≈ 0) gives Ti < h and a huge gain;
+//! [`Tuning::apply`] refuses Ti < h. Tested: identify → AMIGO PI/PID or SIMC → apply on pure
+//! lags of T = 2 to 200 samples: the raw model is refused where Ti < h, the model with the
+//! sampling delay gives a loop that settles.
 //!
 //! # How close the relay gets
 //! The estimate rests on the describing function, which keeps only the fundamental of the
@@ -99,6 +129,32 @@ pub struct Fopdt<F = f64> {
     pub dead_time: F,
 }
 
+impl<F: Real> Fopdt<F> {
+    /// The model a controller sampled every `h` seconds sees: the dead time plus h/2, the
+    /// average delay of the sample-and-hold (Skogestad's practice for digital control). The
+    /// model-based rules need a dead time: a process without one (a pure lag, which
+    /// [`identify_step_at`] fits with L ≈ 0) gets its gain bounded by the sampling instead of
+    /// an unbounded one.
+    ///
+    /// ```
+    /// use regler_pid::Kind;
+    /// use regler_pid::tuning::{amigo, Fopdt};
+    ///
+    /// let pure_lag = Fopdt { gain: 1.0, time_constant: 10.0, dead_time: 0.0 };
+    /// assert!(amigo(pure_lag, Kind::PI).is_err()); // no dead time: no setting
+    /// let t = amigo(pure_lag.with_sampling_delay(0.1), Kind::PI)?;
+    /// assert!(t.k < 100.0 && t.ti > 0.1);
+    /// # Ok::<(), regler_pid::tuning::RuleError>(())
+    /// ```
+    #[must_use]
+    pub fn with_sampling_delay(self, h: F) -> Self {
+        Self {
+            dead_time: self.dead_time + h * F::from_f64_nearest(0.5),
+            ..self
+        }
+    }
+}
+
 /// Controller parameters a rule gives.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -120,9 +176,23 @@ impl<F: Real> Tuning<F> {
     /// Writes kind, K, Ti, Td and b into `config` (everything else — action, filter, limits,
     /// sample period — stays) and validates the result.
     ///
+    /// An integral time shorter than the sample period is refused: a rule gives one for a model
+    /// whose dead time is a small fraction of h (AMIGO PI: Ti ≈ 13·L for L ≪ T), and the gain
+    /// that comes with it (≈ 0.35·T/L) makes the sampled loop swing between its limits. Tune
+    /// from [`Fopdt::with_sampling_delay`] instead.
+    ///
     /// # Errors
-    /// The configuration's own validation error; `config` is unchanged then.
+    /// The configuration's own validation error; [`ConfigError::OutOfRange`] for
+    /// [`Parameter::Ti`](crate::Parameter::Ti) when the kind has I and Ti < `config.h`;
+    /// `config` is unchanged then.
     pub fn apply(&self, config: &mut Config<F>) -> Result<(), ConfigError<F>> {
+        if self.kind.has_i() && self.ti < config.h {
+            return Err(ConfigError::OutOfRange {
+                parameter: crate::Parameter::Ti,
+                value: self.ti,
+                requirement: "at least the sample period h for a tuning rule's result (the model's dead time is far below h: tune from Fopdt::with_sampling_delay(h))",
+            });
+        }
         let mut next = *config;
         next.kind = self.kind;
         next.k = self.k;
@@ -146,6 +216,9 @@ pub enum RuleError {
     Input(&'static str),
     /// The rule has no setting for this controller kind.
     Kind(Kind),
+    /// The rule's result (named) is not a finite positive number for these inputs (they are
+    /// finite, but their ratios overflow or vanish in this float type).
+    Result(&'static str),
 }
 
 impl fmt::Display for RuleError {
@@ -156,6 +229,10 @@ impl fmt::Display for RuleError {
                 f,
                 "the rule has no setting for a {} controller",
                 kind.name()
+            ),
+            Self::Result(name) => write!(
+                f,
+                "the rule's {name} is not a finite positive number for these inputs (they overflow or vanish in this float type)"
             ),
         }
     }
@@ -169,6 +246,16 @@ fn positive<F: Real>(value: F, name: &'static str) -> Result<F, RuleError> {
     } else {
         Err(RuleError::Input(name))
     }
+}
+
+/// A rule's result, checked: K and Ti finite and positive, Td finite and not negative.
+fn checked<F: Real>(t: Tuning<F>) -> Result<Tuning<F>, RuleError> {
+    positive(t.k, "gain K").map_err(|_| RuleError::Result("gain K"))?;
+    positive(t.ti, "Ti").map_err(|_| RuleError::Result("integral time Ti"))?;
+    if !(t.td.is_finite() && t.td >= F::zero()) {
+        return Err(RuleError::Result("derivative time Td"));
+    }
+    Ok(t)
 }
 
 fn c<F: Real>(v: f64) -> F {
@@ -188,7 +275,8 @@ fn c<F: Real>(v: f64) -> F {
 /// ```
 ///
 /// # Errors
-/// Ku or Tu not finite and positive; a kind other than P, PI, PID.
+/// Ku or Tu not finite and positive; a kind other than P, PI, PID; [`RuleError::Result`] when a
+/// result overflows.
 pub fn ziegler_nichols<F: Real>(ultimate: Ultimate<F>, kind: Kind) -> Result<Tuning<F>, RuleError> {
     let ku = positive(ultimate.ku, "Ku")?;
     let tu = positive(ultimate.tu, "Tu")?;
@@ -199,7 +287,7 @@ pub fn ziegler_nichols<F: Real>(ultimate: Ultimate<F>, kind: Kind) -> Result<Tun
         Kind::PID => (ku * c(0.6), tu * c(0.5), tu * c(0.125)),
         other => return Err(RuleError::Kind(other)),
     };
-    Ok(Tuning {
+    checked(Tuning {
         kind,
         k,
         ti,
@@ -215,7 +303,9 @@ pub fn ziegler_nichols<F: Real>(ultimate: Ultimate<F>, kind: Kind) -> Result<Tun
 /// - b = 0 when τ < 0.5 (lag-dominated: weight the set-point out of P), else 1.
 ///
 /// # Errors
-/// K, T or L not finite and non-zero (L > 0, T > 0); a kind other than PI or PID.
+/// K, T or L not finite and non-zero (L > 0, T > 0); a kind other than PI or PID;
+/// [`RuleError::Result`] naming a result that is not a finite positive number (T = 10³⁰ or
+/// T = L = 10⁻³⁰ in `f32`: the ratios overflow or vanish).
 pub fn amigo<F: Real>(model: Fopdt<F>, kind: Kind) -> Result<Tuning<F>, RuleError> {
     let gain = positive(model.gain.abs(), "the process gain")?;
     let t = positive(model.time_constant, "the time constant")?;
@@ -227,7 +317,7 @@ pub fn amigo<F: Real>(model: Fopdt<F>, kind: Kind) -> Result<Tuning<F>, RuleErro
             let k = (c::<F>(0.15) + (c::<F>(0.35) - l * t / ((l + t) * (l + t))) * t / l) / gain;
             let ti = c::<F>(0.35) * l
                 + c::<F>(13.0) * l * t * t / (t * t + c::<F>(12.0) * l * t + c::<F>(7.0) * l * l);
-            Ok(Tuning {
+            checked(Tuning {
                 kind,
                 k,
                 ti,
@@ -239,7 +329,7 @@ pub fn amigo<F: Real>(model: Fopdt<F>, kind: Kind) -> Result<Tuning<F>, RuleErro
             let k = (c::<F>(0.2) + c::<F>(0.45) * t / l) / gain;
             let ti = (c::<F>(0.4) * l + c::<F>(0.8) * t) / (l + c::<F>(0.1) * t) * l;
             let td = c::<F>(0.5) * l * t / (c::<F>(0.3) * l + t);
-            Ok(Tuning { kind, k, ti, td, b })
+            checked(Tuning { kind, k, ti, td, b })
         }
         other => Err(RuleError::Kind(other)),
     }
@@ -258,7 +348,8 @@ pub fn amigo<F: Real>(model: Fopdt<F>, kind: Kind) -> Result<Tuning<F>, RuleErro
 /// ```
 ///
 /// # Errors
-/// An input that is not finite and positive (the gain's magnitude is used).
+/// An input that is not finite and positive (the gain's magnitude is used);
+/// [`RuleError::Result`] naming a result that is not a finite positive number.
 pub fn simc<F: Real>(model: Fopdt<F>, tc: F) -> Result<Tuning<F>, RuleError> {
     let gain = positive(model.gain.abs(), "the process gain")?;
     let t = positive(model.time_constant, "the time constant")?;
@@ -267,7 +358,7 @@ pub fn simc<F: Real>(model: Fopdt<F>, tc: F) -> Result<Tuning<F>, RuleError> {
     let k = t / (gain * (tc + l));
     let four = c::<F>(4.0) * (tc + l);
     let ti = if t < four { t } else { four };
-    Ok(Tuning {
+    checked(Tuning {
         kind: Kind::PI,
         k,
         ti,
@@ -289,8 +380,9 @@ pub enum IdentifyError<F = f64> {
     StepOutsideLog(usize, usize),
     /// A sample is not finite (at this index).
     NotFinite(usize),
-    /// The response has not settled: its last tenth still moves by this fraction of the change
-    /// (e.g. an integrating process, whose step response is a ramp).
+    /// The response has not settled: the mean of its last tenth differs from the mean of the
+    /// tenth before by this fraction of the change (e.g. an integrating process, whose step
+    /// response is a ramp, or a log too short for the process).
     NotSettled(F),
     /// The process did not respond (its change is within twice the samples' noise).
     NoResponse,
@@ -303,6 +395,9 @@ pub enum IdentifyError<F = f64> {
     /// The response is not of the first-order-plus-dead-time kind (the fitted time constant
     /// came out not positive or the dead time clearly negative).
     NotFopdt,
+    /// A quantity (named) overflows the float type: samples near its largest value, or a step
+    /// so small that change / step does not fit.
+    Overflow(&'static str),
 }
 
 impl<F: Real> fmt::Display for IdentifyError<F> {
@@ -322,7 +417,7 @@ impl<F: Real> fmt::Display for IdentifyError<F> {
             Self::NotSettled(moving) => {
                 write!(
                     f,
-                    "the response has not settled (its last tenth still moves by {:.1} % of the change): log longer",
+                    "the response has not settled (its last tenth differs from the tenth before by {:.2} % of the change): log longer",
                     percent(*moving)
                 )
             }
@@ -340,11 +435,18 @@ impl<F: Real> fmt::Display for IdentifyError<F> {
             Self::NotFopdt => {
                 f.write_str("the response does not fit a first-order-plus-dead-time model")
             }
+            Self::Overflow(what) => write!(f, "{what} overflows the float type"),
         }
     }
 }
 
 impl<F: Real> core::error::Error for IdentifyError<F> {}
+
+/// The factor of ν·D/√N in the stated tolerance (see the module docs).
+const NOISE_LOG_FACTOR: f64 = 10.0;
+
+/// Samples before the step from which the noise is measured there (and only there).
+const PRE_WINDOW: usize = 20;
 
 /// A fraction as a percentage, for messages.
 fn percent<F: Real>(fraction: F) -> F {
@@ -473,26 +575,53 @@ pub fn identify_step_at<F: Real>(
     let before = samples.get(..=step_at).unwrap_or(&[]);
     let (y0, pre_noise) = mean_and_spread(before);
     let tail_len = (n / 10).max(2);
-    let tail = response.get(n.saturating_sub(tail_len)..).unwrap_or(&[]);
-    let (y_final, tail_noise) = mean_and_spread(tail);
-    let noise = if pre_noise > tail_noise {
+    let split = n.saturating_sub(tail_len);
+    let tail = response.get(split..).unwrap_or(&[]);
+    let (y_final, _) = mean_and_spread(tail);
+    // The noise: from the samples before the step when there are enough of them — a process
+    // still oscillating at the end of the log must not count as its own noise. Without such a
+    // window, from the tail's largest change between neighbours (half of it): white noise of
+    // peak ν gives about ν, an oscillation of amplitude a and period P samples a·sin(π/P).
+    let noise = if step_at >= PRE_WINDOW {
         pre_noise
     } else {
-        tail_noise
+        let mut jump = F::zero();
+        for pair in tail.windows(2) {
+            if let [x, y] = pair {
+                let d = (*y - *x).abs();
+                jump = if d > jump { d } else { jump };
+            }
+        }
+        let half_jump = jump * c::<F>(0.5);
+        if half_jump > pre_noise {
+            half_jump
+        } else {
+            pre_noise
+        }
     };
     let change = y_final - y0;
+    if !(change.is_finite() && y0.is_finite()) {
+        return Err(IdentifyError::Overflow("the change (the samples' mean)"));
+    }
     let two = F::from_u16(2);
-    if !change.is_finite() || change.abs() <= two * noise {
+    if change.abs() <= two * noise {
         return Err(IdentifyError::NoResponse);
     }
-    // Settled: the tail's first and last thirds agree to 2 % of the change.
-    let third = (tail.len() / 3).max(1);
-    let (early, _) = mean_and_spread(tail.get(..third).unwrap_or(&[]));
-    let (late, _) = mean_and_spread(tail.get(tail.len().saturating_sub(third)..).unwrap_or(&[]));
-    let moving = ((late - early) / change).abs();
-    if moving > c(0.02) {
+    if !(change / step).is_finite() {
+        return Err(IdentifyError::Overflow("the gain (change / step)"));
+    }
+    // Settled: the last tenth's mean and the tenth before's agree to 0.2 % of the change, plus
+    // four standard deviations of the difference of two means of noise of this peak.
+    let previous = response
+        .get(split.saturating_sub(tail_len)..split)
+        .unwrap_or(&[]);
+    let (y_previous, _) = mean_and_spread(previous);
+    let moving = ((y_final - y_previous) / change).abs();
+    let allowed = c::<F>(0.002) + c::<F>(4.0) * noise / (change.abs() * sqrt(count::<F>(tail_len)));
+    if moving > allowed {
         return Err(IdentifyError::NotSettled(moving));
     }
+    let late = y_final;
     // The normalised response r = (y − y0)/change goes from 0 to 1 and never leaves 0..=1
     // for an FOPDT process; beyond 1 % of the change plus twice the noise it is another shape.
     let unit = |v: F| (v - y0) / change;
@@ -543,8 +672,19 @@ pub fn identify_step_at<F: Real>(
     let e = F::from_f64_nearest(core::f64::consts::E);
     let time_constant = e * a1.value() * h;
     let dead_time = t_ar - time_constant;
-    // A dead time a little below zero is sampling error; clearly negative is another shape.
-    if time_constant.is_nan() || time_constant <= F::zero() || dead_time < -h {
+    if !(t_ar.is_finite() && time_constant.is_finite()) {
+        return Err(IdentifyError::Overflow(
+            "T + L (the sample period times the log)",
+        ));
+    }
+    // A dead time a little below zero is sampling error and noise (the stated tolerance);
+    // below that it is another shape.
+    let duration = count::<F>(n) * h;
+    let relative_noise = noise / change.abs();
+    let slack = h
+        + c::<F>(0.02) * t_ar
+        + relative_noise * (t_ar + c::<F>(NOISE_LOG_FACTOR) * duration / sqrt(count::<F>(n)));
+    if time_constant.is_nan() || time_constant <= F::zero() || dead_time < -slack {
         return Err(IdentifyError::NotFopdt);
     }
     let dead_time = if dead_time > F::zero() {
@@ -623,6 +763,12 @@ pub enum RelayError<F = f64> {
     },
     /// The experiment was aborted.
     Aborted,
+    /// Ku = 4d/(π·√(a² − ε²)) is not a finite number in this float type: the amplitude a is
+    /// too small against the relay amplitude d (or too close to the hysteresis ε) to measure.
+    AmplitudeUnmeasurable {
+        /// The amplitude seen.
+        amplitude: F,
+    },
 }
 
 impl<F: fmt::Display> fmt::Display for RelayError<F> {
@@ -644,6 +790,10 @@ impl<F: fmt::Display> fmt::Display for RelayError<F> {
                 "the oscillation's amplitude {amplitude} does not clear the hysteresis: lower it or raise the relay amplitude"
             ),
             Self::Aborted => f.write_str("the relay experiment was aborted"),
+            Self::AmplitudeUnmeasurable { amplitude } => write!(
+                f,
+                "the oscillation's amplitude {amplitude} is too small against the relay amplitude for Ku to be a finite number: raise the measurement's scale or lower the relay amplitude"
+            ),
         }
     }
 }
@@ -664,6 +814,10 @@ pub enum HandOverError<F = f64> {
     },
     /// The controller's configuration is not valid.
     Config(ConfigError<F>),
+    /// The set-point or the measurement of the hand-over sample is not finite (named): the
+    /// controller could not start from it, so its first output would not continue from the
+    /// bias. Hand over at a sample with a good measurement.
+    NotFinite(&'static str),
 }
 
 const fn action_name(action: Action) -> &'static str {
@@ -686,6 +840,10 @@ impl<F: Real> fmt::Display for HandOverError<F> {
                 action_name(*controller)
             ),
             Self::Config(e) => write!(f, "the tuned configuration: {e}"),
+            Self::NotFinite(what) => write!(
+                f,
+                "the {what} at the hand-over is not finite: the controller cannot start bumplessly from it"
+            ),
         }
     }
 }
@@ -920,7 +1078,14 @@ impl<F: Real> Relay<F> {
             return Err(RelayError::AmplitudeBelowHysteresis { amplitude: a });
         }
         let pi = F::from_f64_nearest(core::f64::consts::PI);
-        let ku = F::from_u16(4) * self.config.amplitude / (pi * sqrt(a * a - eps * eps));
+        // √(a² − ε²) as a·√(1 − (ε/a)²): a² underflows for a tiny amplitude (1e-23 in f32) and
+        // overflows for a huge one, ε/a < 1 does neither.
+        let ratio = eps / a;
+        let root = a * sqrt(F::one() - ratio * ratio);
+        let ku = F::from_u16(4) * self.config.amplitude / (pi * root);
+        if !(ku.is_finite() && ku > F::zero()) {
+            return Err(RelayError::AmplitudeUnmeasurable { amplitude: a });
+        }
         Ok(Some(Ultimate { ku, tu }))
     }
 
@@ -940,7 +1105,8 @@ impl<F: Real> Relay<F> {
     /// # Errors
     /// [`HandOverError::Action`] when `config.action` differs from the experiment's action
     /// (every combination is checked); [`HandOverError::Config`], the configuration's
-    /// validation error.
+    /// validation error; [`HandOverError::NotFinite`] naming a set-point or measurement that is
+    /// not finite (the relay skips such a sample; the hand-over refuses it).
     pub fn hand_over<T: Scalar>(
         &self,
         config: &Config<F>,
@@ -952,6 +1118,12 @@ impl<F: Real> Relay<F> {
                 experiment: self.config.action,
                 controller: config.action,
             });
+        }
+        if !setpoint.is_finite() {
+            return Err(HandOverError::NotFinite("set-point"));
+        }
+        if !measurement.is_finite() {
+            return Err(HandOverError::NotFinite("measurement"));
         }
         let mut pid = Pid::new(config).map_err(HandOverError::Config)?;
         let _ = pid.set_manual(T::from_real(self.config.bias));

@@ -284,3 +284,285 @@ fn a_minimum_pulse_longer_than_the_stroke_is_refused() {
         .is_ok()
     );
 }
+
+/// The motor, in f64 whatever the driver's float type: it moves `s / run_time` per pulse and
+/// stops at its ends. Its position is held as where it last stood still at an end (or started)
+/// plus the seconds driven since (summed exactly: Knuth's two-sum), divided by the run time
+/// once when read, so its own rounding stays far below the driver's; `apply` returns the
+/// pulse's travel.
+struct Motor {
+    base: f64,
+    gt: f64,
+    seconds: (f64, f64),
+}
+
+impl Motor {
+    fn new(at: f64, gt: f64) -> Self {
+        Motor {
+            base: at,
+            gt,
+            seconds: (0.0, 0.0),
+        }
+    }
+
+    fn at(&self) -> f64 {
+        self.base + (self.seconds.0 + self.seconds.1) / self.gt
+    }
+
+    fn apply<F: regler_pid::Real>(&mut self, drive: Drive<F>) -> f64 {
+        let s = match drive {
+            Drive::Stop => return 0.0,
+            Drive::Open(s) => s.to_f64_exact(),
+            Drive::Close(s) => -s.to_f64_exact(),
+        };
+        let (hi, lo) = self.seconds;
+        let sum = hi + s;
+        let virt = sum - hi;
+        let err = (hi - (sum - virt)) + (s - virt);
+        self.seconds = (sum, lo + err);
+        if self.at() >= 1.0 {
+            *self = Motor::new(1.0, self.gt);
+        } else if self.at() <= 0.0 {
+            *self = Motor::new(0.0, self.gt);
+        }
+        s.abs() / self.gt
+    }
+}
+
+fn motor<F: regler_pid::Real>(real: &mut f64, drive: Drive<F>, gt: f64) -> f64 {
+    let mut m = Motor::new(*real, gt);
+    let travel = m.apply(drive);
+    *real = m.at();
+    travel
+}
+
+/// The tolerance the module docs state for the estimate against the motor: ε·(4 + strokes
+/// travelled), ε the float type's epsilon.
+fn estimate_tolerance<F: regler_pid::Real>(travelled: f64) -> f64 {
+    F::epsilon().to_f64_exact() * (4.0 + travelled)
+}
+
+/// Issue 19 item 11, attack finding 1: a 1 kHz loop on a 200 s valve in f32 (one sample's
+/// travel 5·10⁻⁶, below the 64-ulp snap at the ends): the estimate stayed at 0 while every
+/// sample drove open, and the motor ran fully open. Both forms, both ends.
+#[test]
+fn f32_estimate_follows_a_slow_valve_from_either_end() {
+    let gt = 200.0f32;
+    for (start, target) in [(0.0f32, 0.5f32), (1.0, 0.5), (0.5, 0.0), (0.5, 1.0)] {
+        for velocity in [false, true] {
+            let cfg = ActuatorConfig {
+                run_time: gt,
+                min_pulse: 0.0,
+                dead_band: if velocity { 0.0 } else { 0.005 },
+                h: 0.001,
+            };
+            let mut v = ThreePoint::new(cfg, start).unwrap();
+            let mut real = f64::from(start);
+            let mut travelled = 0.0;
+            for k in 0..300_000 {
+                let d = if velocity {
+                    v.update_delta(if k == 0 { target - start } else { 0.0 })
+                } else {
+                    v.update(target)
+                }
+                .unwrap();
+                travelled += motor(&mut real, d, f64::from(gt));
+            }
+            let gap = (f64::from(v.position()) - real).abs();
+            assert!(
+                gap <= estimate_tolerance::<f32>(travelled),
+                "from {start} to {target} (velocity {velocity}): estimate {} motor {real}",
+                v.position()
+            );
+            // 300 s at 1/200 of the stroke per second: it got there.
+            assert!((real - f64::from(target)).abs() <= 0.005 + 1e-6, "{real}");
+        }
+    }
+}
+
+/// Every configuration the constructor takes, with extreme ratios: h / run_time from 10⁻¹² to
+/// 1, the minimum pulse 0, h, or between, the dead band 0 or up to 5 %.
+fn extreme_config<F: regler_pid::Real>() -> impl Strategy<Value = ActuatorConfig<F>> {
+    (
+        -3.0f64..0.5,
+        0.0f64..12.0,
+        0usize..4,
+        0.0f64..=1.0,
+        0usize..3,
+        0.0f64..0.05,
+    )
+        .prop_map(
+            |(log_h, log_gt_in_h, pulse_kind, pulse_frac, band_kind, band)| {
+                let f = F::from_f64_nearest;
+                let h = 10f64.powf(log_h);
+                let run_time = h * 10f64.powf(log_gt_in_h);
+                let min_pulse = match pulse_kind {
+                    0 => 0.0,
+                    1 => h,
+                    _ => h * pulse_frac,
+                };
+                ActuatorConfig {
+                    run_time: f(run_time),
+                    min_pulse: f(min_pulse),
+                    dead_band: f(if band_kind == 0 { 0.0 } else { band }),
+                    h: f(h),
+                }
+            },
+        )
+}
+
+/// One request: a position (positional form), a change (velocity form), a non-finite value, or
+/// the target held.
+#[derive(Clone, Copy, Debug)]
+enum Request {
+    To(f64),
+    By(f64),
+    NotFinite,
+}
+
+fn any_request() -> impl Strategy<Value = Request> {
+    prop_oneof![
+        any_target().prop_map(Request::To),
+        prop_oneof![-0.3f64..0.3, -1e-6f64..1e-6, Just(1.0), Just(-1.0)].prop_map(Request::By),
+        Just(Request::NotFinite),
+    ]
+}
+
+/// Drives `config` through `requests`, each held (or repeated as a zero change) for `hold`
+/// samples, against the f64 motor; checks the stated tolerance at every sample.
+fn follows_the_motor<F: regler_pid::Real>(
+    config: ActuatorConfig<F>,
+    start: f64,
+    requests: &[Request],
+    hold: usize,
+) -> Result<(), TestCaseError> {
+    let f = F::from_f64_nearest;
+    let Ok(mut v) = ThreePoint::new(config, f(start)) else {
+        // Only h / run_time below the smallest normal number is refused here.
+        prop_assert!(
+            (config.h / config.run_time).to_f64_exact() < F::min_positive_value().to_f64_exact()
+        );
+        return Ok(());
+    };
+    let gt = config.run_time.to_f64_exact();
+    let mut m = Motor::new(v.position().to_f64_exact(), gt);
+    let mut travelled = 0.0;
+    for &r in requests {
+        for k in 0..hold {
+            let d = match r {
+                Request::To(t) => v.update(f(t)),
+                Request::By(d) => v.update_delta(if k == 0 { f(d) } else { F::zero() }),
+                Request::NotFinite => v.update(F::nan()),
+            }
+            .unwrap_or(Drive::Stop);
+            travelled += m.apply(d);
+            let real = m.at();
+            let p = v.position().to_f64_exact();
+            prop_assert!((0.0..=1.0).contains(&p));
+            prop_assert!(
+                (p - real).abs() <= estimate_tolerance::<F>(travelled),
+                "{config:?}: estimate {p} motor {real} after {travelled} strokes"
+            );
+        }
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Issue 19 item 11, attack finding 1, as a property: for every accepted configuration
+    /// (extreme ratios included), any mix of positional and velocity requests, in f32 and
+    /// f64, the estimate follows the f64 motor within ε·(4 + strokes travelled) at every
+    /// sample.
+    #[test]
+    fn the_estimate_follows_the_motor_in_f32_and_f64(
+        c32 in extreme_config::<f32>(),
+        c64 in extreme_config::<f64>(),
+        start in prop_oneof![Just(0.0f64), Just(1.0), 0.0f64..=1.0],
+        requests in proptest::collection::vec(any_request(), 1..12),
+        hold in 1usize..400,
+    ) {
+        follows_the_motor(c32, start, &requests, hold)?;
+        follows_the_motor(c64, start, &requests, hold)?;
+    }
+
+    /// Issue 19 item 11, attack finding 7: a saturating PI's output changes fed to
+    /// `update_delta` (the composition the module docs recommend). Once the output sits at its
+    /// limit 0 or 1, the valve is driven into that stop: shut or fully open, exactly — not left
+    /// below one minimum pulse's travel from it.
+    #[test]
+    fn velocity_form_driven_to_a_limit_reaches_the_stop(
+        config in any_config(),
+        start in 0.0f64..=1.0,
+        open in any::<bool>(),
+        k in 0.01f64..2.0,
+    ) {
+        let mut v = ThreePoint::new(config, start).unwrap();
+        let pid_config = Config::<f64> {
+            kind: Kind::PI,
+            k,
+            ti: 20.0 * config.h,
+            h: config.h,
+            ymin: 0.0,
+            ymax: 1.0,
+            ..Config::default()
+        };
+        let mut pid: Pid<f64> = Pid::new(&pid_config).unwrap();
+        let _ = pid.set_manual(start);
+        let _ = pid.update(0.5, 0.5);
+        pid.set_auto();
+        let mut last = start;
+        let mut real = start;
+        let setpoint = if open { 1.0 } else { -1.0 };
+        let samples = (3.0 * config.run_time / config.h) as usize + 2_000;
+        for _ in 0..samples {
+            let u = pid.update(setpoint, 0.0);
+            let d = v.update_delta(u - last).unwrap();
+            last = u;
+            direction(d, &config)?;
+            motor(&mut real, d, config.run_time);
+        }
+        let goal = if open { 1.0 } else { 0.0 };
+        prop_assert_eq!(last, goal);
+        prop_assert_eq!(v.position(), goal);
+        prop_assert!((real - goal).abs() < 1e-9, "motor {} estimate {}", real, v.position());
+    }
+}
+
+/// Attack finding 7, the reported case: run time 60 s, minimum pulse 0.2 s, dead band 1 %; the
+/// controller's output walks down from 0.5 and saturates at 0 — the valve stayed 0.9 % open.
+#[test]
+fn velocity_form_shuts_when_the_controller_output_reaches_zero() {
+    let cfg = ActuatorConfig {
+        run_time: 60.0,
+        min_pulse: 0.2,
+        dead_band: 0.01,
+        h: 1.0,
+    };
+    let mut v = ThreePoint::new(cfg, 0.5).unwrap();
+    let mut real = 0.5;
+    let mut last = 0.5f64;
+    for k in 1..400 {
+        let u = (0.5 - 0.0093 * f64::from(k)).max(0.0);
+        motor(&mut real, v.update_delta(u - last).unwrap(), 60.0);
+        last = u;
+    }
+    assert_eq!(v.position(), 0.0);
+    assert!(real < 1e-12, "{real}");
+}
+
+/// The only configurations refused for resolution: one sample's travel below the smallest
+/// normal number (it could not be resolved at all).
+#[test]
+fn a_travel_per_sample_below_the_float_type_is_refused_with_why() {
+    let cfg = ActuatorConfig {
+        run_time: 1e30f32,
+        min_pulse: 0.0,
+        dead_band: 0.0,
+        h: 1e-10,
+    };
+    let err = ThreePoint::new(cfg, 0.0).unwrap_err();
+    assert!(err.to_string().contains("h / run_time"), "{err}");
+    assert!(ThreePoint::new(ActuatorConfig { h: 1e-6, ..cfg }, 0.0).is_ok());
+}
