@@ -411,7 +411,8 @@ impl Sim {
             timeout: config.timeout(),
             retries: config.retries,
             gap: 1,
-        });
+        })
+        .map_err(|e| e.to_string())?;
         let per_crate = (0..=config.crates)
             .map(|a| CrateSummary {
                 address: a,
@@ -772,7 +773,8 @@ pub mod ports {
             timeout: 64,
             retries: 3,
             gap: 1,
-        });
+        })
+        .map_err(|e| e.to_string())?;
         let mut rng = regler_panel_link::line::Noise::new(0.0, seed).map_err(|e| e.to_string())?;
         let mut input = WAIT;
         let (mut completed, mut failed, mut undetected) = (0u64, 0u64, 0u64);

@@ -292,7 +292,7 @@ mod tests {
                 writes: 0,
                 fail_from,
             };
-            let mut driver: Driver<1> = Driver::new(DriverConfig::default());
+            let mut driver: Driver<1> = Driver::new(DriverConfig::default()).unwrap();
             driver.submit(read).unwrap();
             let mut input = crate::highway::WAIT;
             let mut completed = std::vec::Vec::new();

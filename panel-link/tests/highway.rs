@@ -410,7 +410,8 @@ fn a_noisy_loop_never_lies() {
         timeout: 80,
         retries: 3,
         gap: 1,
-    });
+    })
+    .unwrap();
     let mut rng = Noise::new(0.0, 1).unwrap();
     let mut pending: Vec<Option<Message>> = vec![None; usize::from(crates_n) + 1];
     let mut line = WAIT;
@@ -744,7 +745,8 @@ fn driver_with_every_crate_outstanding() -> (Driver<62>, Vec<u8>) {
         timeout: 1_000_000,
         retries: 0,
         gap: 1,
-    });
+    })
+    .unwrap();
     for address in 1..=62 {
         driver.submit(outstanding(address)).unwrap();
     }
@@ -774,11 +776,13 @@ fn addressee_output(
         read,
         ..Crate::default()
     };
-    let out: Vec<u8> = command_bytes
+    // One WAIT first: a fresh controller reads nothing before a clean delimiter.
+    let out: Vec<u8> = [WAIT]
         .iter()
+        .chain(command_bytes)
         .chain(&[WAIT; 2])
         .map(|&b| c.clock(b, &mut d))
-        .skip(1)
+        .skip(2)
         .collect();
     let reply = replies(&out).into_iter().find_map(Result::ok);
     (out, reply)
@@ -1055,7 +1059,8 @@ fn a_loop_of_62_crates_under_two_bit_errors_never_lies() {
         timeout: 4 * 63 + 64,
         retries: 8,
         gap: 1,
-    });
+    })
+    .unwrap();
     let mut rng = Noise::new(0.0, 47).unwrap();
     let mut pending: Vec<Option<Message>> = vec![None; 63];
     // Per link, bits still to flip: (clocks from now, mask).
@@ -1137,4 +1142,176 @@ fn a_loop_of_62_crates_under_two_bit_errors_never_lies() {
     );
     assert!(completed > 2_000, "{completed} completed, {stats:?}");
     assert!(failed * 100 < completed, "{failed} failed of {completed}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Restarts (issue 19, round 2, item 1): a fresh controller or driver starts in the junk state.
+// ---------------------------------------------------------------------------------------------
+
+/// Writes whose data make the tail of the command, from SN on, a clean F9 command to the crate
+/// SN names (`0x20 | station`, crates 32–62): SN d0 d1 d2 d3 read as header SA SF SN SUM; the
+/// write's SUM is SPACE when header ⊕ SA ⊕ SF has all six columns set (header `0x2F ^ A` with
+/// F16), so the restarted controller sees the SPACE run it checks before it answers. The attack's
+/// `N1 A15 F16 0x04988B` to crate 32 is one. One per station 0–30, every subaddress used.
+fn writes_whose_tail_is_a_command() -> Vec<Message> {
+    (0..31u8)
+        .map(|station| {
+            let subaddress = station % 16;
+            let (n, a, f) = (station ^ 3, subaddress ^ 1, 9);
+            let tail_sum = ((0x20 | station) ^ a ^ f ^ (0x20 | n)) & 0x3F;
+            let data = [a, f, 0x20 | n, tail_sum]
+                .iter()
+                .fold(0u32, |w, &b| w << 6 | u32::from(b));
+            let m = cmd(0x2F ^ subaddress, station, subaddress, 16, Some(data));
+            let bytes = encode(&m);
+            assert_eq!(bytes[8], regler_panel_link::highway::SPACE, "{m:?}");
+            m
+        })
+        .collect()
+}
+
+/// Every crate address 1–62, every command shape (the ten weak ones, the attack's command and
+/// writes whose tail is a clean command), a fresh controller started at every byte of the
+/// command (as after a reset mid-command: it sees the command's tail, then WAIT): it runs no cycle
+/// but the one sent (only when it saw all of it from before the header), and then runs the next
+/// clean command sent to it.
+#[test]
+fn a_controller_restarted_at_any_byte_of_any_command_runs_nothing_else() {
+    let mut shapes = command_shapes();
+    shapes.push(cmd(32, 1, 15, 16, Some(0x04_988B)));
+    let adversarial = writes_whose_tail_is_a_command();
+    assert_eq!(adversarial.len(), 31);
+    shapes.extend(adversarial);
+    let probes = probes();
+    let mut cases = 0u64;
+    for m in &shapes {
+        let bytes = encode(m);
+        for start in 0..bytes.len() {
+            let stream: Vec<u8> = bytes[start..].iter().copied().chain([WAIT]).collect();
+            let what = || format!("{m:?} restarted before byte {start}");
+            for address in 1..=62u8 {
+                let mut c = Controller::new(ControllerConfig {
+                    address,
+                    demand_repeat: 0,
+                })
+                .unwrap();
+                let mut d = Crate {
+                    address,
+                    ..Crate::default()
+                };
+                for &b in &stream {
+                    c.clock(b, &mut d);
+                }
+                let sent = [fields(m)];
+                let allowed: &[Run] = if address == m.crate_address() {
+                    &sent
+                } else {
+                    &[]
+                };
+                assert!(
+                    d.cycles.iter().all(|c| allowed.contains(c)),
+                    "{}: crate {address} ran {:?}",
+                    what(),
+                    d.cycles
+                );
+                d.cycles.clear();
+                for &b in &probes[usize::from(address) - 1] {
+                    c.clock(b, &mut d);
+                }
+                assert_eq!(
+                    d.cycles,
+                    [fields(&probe(address))],
+                    "{}: crate {address} did not run the next clean command",
+                    what()
+                );
+                cases += 1;
+            }
+        }
+    }
+    assert!(cases > 30_000, "{cases}");
+}
+
+proptest! {
+    /// The same over random commands: a fresh controller for the addressed crate, and one for
+    /// the crate the command's tail would name, started at any byte.
+    #[test]
+    fn a_restarted_controller_runs_no_cycle_never_sent(m in command(), start in 1usize..15) {
+        let bytes = encode(&m);
+        let start = start % bytes.len();
+        let named = bytes[start] & 0x3F;
+        for address in [m.crate_address(), named.clamp(1, 62)] {
+            let mut c = Controller::new(ControllerConfig { address, demand_repeat: 0 }).unwrap();
+            let mut d = Crate { address, ..Crate::default() };
+            for &b in bytes[start..].iter().chain(&[WAIT]) {
+                c.clock(b, &mut d);
+            }
+            prop_assert!(d.cycles.is_empty(), "crate {address} ran {:?}", d.cycles);
+        }
+    }
+}
+
+/// Read replies whose data make the reply's tail d2 d3 ENDSUM a clean short reply from crate
+/// `crate_address` (d2 its header, d3 a status, and d0 d1 chosen so the ENDSUM cancels).
+fn read_reply_whose_tail_is_a_reply(from: u8, crate_address: u8) -> Message {
+    let header = from;
+    let status = 0x10 | 0x06; // M1, X, Q
+    let d2 = crate_address;
+    let d3 = 0x10 | 0x02;
+    // The tail's ENDSUM must cancel d2 ^ d3, so header ^ status ^ d0 ^ d1 must be 0 in columns.
+    let d0 = 0x15;
+    let d1 = (header ^ status ^ d0) & 0x3F;
+    let data = [d0, d1, d2, d3]
+        .iter()
+        .fold(0u32, |w, &b| w << 6 | u32::from(b));
+    Message::Reply {
+        crate_address: from,
+        status: Status::from_bits(status),
+        data: Some(data),
+    }
+}
+
+/// A driver restarted while replies are on their way back (a fresh driver whose command to crate
+/// `target` goes out at its first clock) sees the tail of a reply started at every byte — a reply
+/// whose tail is a clean reply from `target`, a short reply and a demand — for every crate 1–62:
+/// it completes nothing.
+#[test]
+fn a_driver_restarted_at_any_byte_of_a_reply_completes_nothing() {
+    let generic = [
+        Message::Reply {
+            crate_address: 9,
+            status: Status::from_bits(6),
+            data: None,
+        },
+        Message::Demand {
+            crate_address: 12,
+            sgl: 5,
+        },
+    ];
+    for target in 1..=62u8 {
+        let mut fresh: Driver<1> = Driver::new(DriverConfig {
+            timeout: 1_000_000,
+            retries: 0,
+            gap: 1,
+        })
+        .unwrap();
+        fresh.submit(outstanding(target)).unwrap();
+        let adversarial = encode(&read_reply_whose_tail_is_a_reply(40, target));
+        assert_eq!(
+            decode(&adversarial[4..]).map(|r| r.crate_address()),
+            Ok(target)
+        );
+        let segments = [adversarial, encode(&generic[0]), encode(&generic[1])];
+        for segment in &segments {
+            for start in 0..segment.len() {
+                let mut d = fresh.clone();
+                for &b in segment[start..].iter().chain(&[WAIT; 2]) {
+                    let event = d.clock(b).event;
+                    assert!(
+                        !matches!(event, Some(DriverEvent::Completed(_))),
+                        "{segment:02x?} from byte {start}: {event:?}"
+                    );
+                }
+            }
+        }
+    }
 }

@@ -49,7 +49,8 @@ fuzz_target!(|data: &[u8]| {
         timeout: 1_000_000,
         retries: 0,
         gap: 1,
-    });
+    })
+        .unwrap();
     for address in 1..=62 {
         driver.submit(outstanding(address)).unwrap();
     }

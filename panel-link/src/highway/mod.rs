@@ -804,9 +804,13 @@ pub(crate) struct Framer {
 }
 
 impl Framer {
+    /// A reader that starts as after a break: junk up to the first clean delimiter. A machine
+    /// that (re)starts may be in the middle of a message, and a message's tail can be a clean
+    /// message of its own (a write's SN and data read as a command to crate 32–62); an idle
+    /// line's first WAIT ends the junk at once.
     pub(crate) const fn new() -> Self {
         Self {
-            state: FrameState::Between,
+            state: FrameState::Junk,
         }
     }
 
