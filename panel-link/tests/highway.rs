@@ -16,8 +16,8 @@
 
 use proptest::prelude::*;
 use regler_panel_link::highway::{
-    Controller, ControllerConfig, Cycle, Dataway, DecodeError, Driver, DriverConfig, DriverEvent,
-    MAX_MESSAGE, Message, Status, WAIT, decode, is_delimiter,
+    Controller, ControllerConfig, Cycle, Dataway, DecodeError, Driver, DriverConfig, DriverError,
+    DriverEvent, MAX_MESSAGE, Message, Status, WAIT, decode, is_delimiter,
 };
 use regler_panel_link::line::Noise;
 
@@ -40,14 +40,14 @@ fn command() -> impl Strategy<Value = Message> {
 fn message() -> impl Strategy<Value = Message> {
     prop_oneof![
         command(),
-        (0u8..=63, 0u8..16, proptest::option::of(0u32..1 << 24)).prop_map(|(c, s, data)| {
+        (1u8..=62, 0u8..16, proptest::option::of(0u32..1 << 24)).prop_map(|(c, s, data)| {
             Message::Reply {
                 crate_address: c,
                 status: Status::from_bits(s),
                 data,
             }
         }),
-        (0u8..=63, 0u8..=31).prop_map(|(c, sgl)| Message::Demand {
+        (1u8..=62, 1u8..=31).prop_map(|(c, sgl)| Message::Demand {
             crate_address: c,
             sgl
         }),
@@ -79,7 +79,7 @@ fn sample_messages() -> Vec<Message> {
             },
         });
         out.push(Message::Reply {
-            crate_address: (r >> 40) as u8 % 64,
+            crate_address: 1 + (r >> 40) as u8 % 62,
             status: Status::from_bits((r >> 48) as u8),
             data: if k % 2 == 0 {
                 Some((r >> 8) as u32 & 0xFF_FFFF)
@@ -88,8 +88,8 @@ fn sample_messages() -> Vec<Message> {
             },
         });
         out.push(Message::Demand {
-            crate_address: (r >> 56) as u8 % 64,
-            sgl: (r >> 3) as u8 % 32,
+            crate_address: 1 + (r >> 56) as u8 % 62,
+            sgl: 1 + (r >> 3) as u8 % 31,
         });
     }
     // Extremes: all-zero and all-one fields.
@@ -108,12 +108,12 @@ fn sample_messages() -> Vec<Message> {
         data: Some(0xFF_FFFF),
     });
     out.push(Message::Reply {
-        crate_address: 63,
+        crate_address: 62,
         status: Status::from_bits(15),
         data: Some(0xFF_FFFF),
     });
     out.push(Message::Reply {
-        crate_address: 0,
+        crate_address: 1,
         status: Status::default(),
         data: Some(0),
     });
@@ -236,6 +236,45 @@ proptest! {
         prop_assert_eq!(decode(&bytes), Ok(m));
     }
 
+    /// Item 4: a reply or demand from crate 0 or 63, or a demand with SGL 0, is not a message:
+    /// `encode` refuses to make one, and its bytes (row parity, delimiter and column sum all
+    /// right) `decode` to the rule it breaks.
+    #[test]
+    fn no_reply_or_demand_from_crate_0_or_63_nor_a_demand_with_sgl_0(
+        c in prop::sample::select(vec![0u8, 63, 1, 62, 32]),
+        status in 0u8..16,
+        data in proptest::option::of(0u32..1 << 24),
+        sgl in 0u8..=31,
+    ) {
+        use regler_panel_link::highway::{EncodeError, data_bytes, endsum_byte, with_parity};
+        let not_a_crate = c == 0 || c == 63;
+        let reply = Message::Reply { crate_address: c, status: Status::from_bits(status), data };
+        let mut text = vec![with_parity(c), with_parity(0x10 | status)];
+        if let Some(w) = data {
+            text.extend(data_bytes(w));
+        }
+        text.push(endsum_byte(&text));
+        let mut buf = [0u8; MAX_MESSAGE];
+        if not_a_crate {
+            prop_assert_eq!(reply.encode(&mut buf), Err(EncodeError::NotACrate(c)));
+            prop_assert_eq!(decode(&text), Err(DecodeError::NotACrate { crate_address: c }));
+        } else {
+            prop_assert_eq!(decode(&text), Ok(reply));
+        }
+        let demand = Message::Demand { crate_address: c, sgl };
+        let mut text = vec![with_parity(c), with_parity(0x20 | sgl)];
+        text.push(endsum_byte(&text));
+        if not_a_crate {
+            prop_assert_eq!(demand.encode(&mut buf), Err(EncodeError::NotACrate(c)));
+            prop_assert_eq!(decode(&text), Err(DecodeError::NotACrate { crate_address: c }));
+        } else if sgl == 0 {
+            prop_assert_eq!(demand.encode(&mut buf), Err(EncodeError::SglZero));
+            prop_assert_eq!(decode(&text), Err(DecodeError::SglZero { crate_address: c }));
+        } else {
+            prop_assert_eq!(decode(&text), Ok(demand));
+        }
+    }
+
     #[test]
     fn a_command_with_more_room_than_needed_still_decodes(m in command(), extra in 0usize..20) {
         let mut bytes = encode(&m);
@@ -248,6 +287,14 @@ proptest! {
     #[test]
     fn decode_of_any_bytes_is_total_and_a_success_is_canonical(bytes in proptest::collection::vec(any::<u8>(), 0..80)) {
         if let Ok(m) = decode(&bytes) {
+            // Replies and demands only from crates 1–62, demands never with SGL 0.
+            match m {
+                Message::Reply { crate_address, .. } => prop_assert!((1..=62).contains(&crate_address)),
+                Message::Demand { crate_address, sgl } => {
+                    prop_assert!((1..=62).contains(&crate_address) && sgl != 0);
+                }
+                Message::Command { .. } => {}
+            }
             // Whatever decodes re-encodes to the same message.
             prop_assert_eq!(decode(&encode(&m)), Ok(m));
         }
@@ -1314,4 +1361,197 @@ fn a_driver_restarted_at_any_byte_of_a_reply_completes_nothing() {
             }
         }
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Time-out (round 2, item 3) and phantom demands (round 2, item 4).
+// ---------------------------------------------------------------------------------------------
+
+/// A crate whose LAM toggles every `period` clocks (so its controller keeps sending demands and
+/// holding bytes behind them: the longest delay a controller adds).
+struct Busy {
+    inner: Crate,
+    clock: u32,
+    period: u32,
+}
+
+impl Dataway for Busy {
+    fn cycle(&mut self, n: u8, a: u8, f: u8, write: Option<u32>) -> Cycle {
+        self.inner.cycle(n, a, f, write)
+    }
+    fn graded_lam(&mut self) -> u8 {
+        self.clock += 1;
+        if (self.clock / self.period).is_multiple_of(2) {
+            3
+        } else {
+            5
+        }
+    }
+}
+
+/// `Driver::new` refuses a time-out below a one-controller loop's round trip, naming it.
+#[test]
+fn a_time_out_shorter_than_any_round_trip_is_refused() {
+    for gap in [0u8, 1, 7, 255] {
+        let least = DriverConfig {
+            timeout: 0,
+            retries: 0,
+            gap,
+        }
+        .least_timeout();
+        assert_eq!(least, 4 + 2 * 15 + u32::from(gap));
+        for timeout in [0, 1, least - 1] {
+            let config = DriverConfig {
+                timeout,
+                retries: 3,
+                gap,
+            };
+            let err = Driver::<1>::new(config).err();
+            assert_eq!(err, Some(DriverError::TimeoutTooShort { timeout, least }));
+            assert!(err.unwrap().to_string().contains(&least.to_string()));
+        }
+        assert!(
+            Driver::<1>::new(DriverConfig {
+                timeout: least,
+                retries: 3,
+                gap
+            })
+            .is_ok()
+        );
+    }
+    assert!(Driver::<1>::new(DriverConfig::default()).is_ok());
+}
+
+/// The attack: 20 controllers, each read of crate 20 submitted when the one before completed.
+/// With `DriverConfig::for_loop(n)` — on loops of 1, 2, 7, 20 and 62 controllers, every one of
+/// them demanding all the time so each holds bytes behind its demands — every read completes with
+/// its own data. (With the time-out the attack used, 1, N2 completed with N1's data.)
+#[test]
+fn a_time_out_for_the_loop_never_completes_a_read_with_another_reads_data() {
+    for controllers in [1u8, 2, 7, 20, 62] {
+        for period in [3u32, 11] {
+            let mut loop_: Vec<(Controller, Busy)> = (1..=controllers)
+                .map(|address| {
+                    let c = Controller::new(ControllerConfig {
+                        address,
+                        demand_repeat: 0,
+                    })
+                    .unwrap();
+                    let inner = Crate {
+                        address,
+                        ..Crate::default()
+                    };
+                    (
+                        c,
+                        Busy {
+                            inner,
+                            clock: u32::from(address),
+                            period,
+                        },
+                    )
+                })
+                .collect();
+            let mut driver: Driver<1> = Driver::new(DriverConfig::for_loop(controllers)).unwrap();
+            let last = controllers;
+            let mut station = 0u8;
+            driver.submit(cmd(last, station, 0, 0, None)).unwrap();
+            let (mut line, mut completed) = (WAIT, 0);
+            for _ in 0..20_000 {
+                let step = driver.clock(line);
+                line = loop_
+                    .iter_mut()
+                    .fold(step.transmit, |b, (c, d)| c.clock(b, d));
+                match step.event {
+                    Some(DriverEvent::Completed(done)) => {
+                        assert_eq!(
+                            done.data,
+                            Some(read_value(last, station, 0)),
+                            "{controllers} controllers: N{station} completed with other data"
+                        );
+                        completed += 1;
+                        station = (station + 1) % 32;
+                        driver.submit(cmd(last, station, 0, 0, None)).unwrap();
+                    }
+                    Some(DriverEvent::Failed { .. }) => panic!("{controllers}: a read failed"),
+                    _ => {}
+                }
+            }
+            assert!(completed > 20, "{controllers} controllers: {completed}");
+            assert_eq!(driver.stats().timeouts, 0, "{controllers} controllers");
+        }
+    }
+}
+
+/// Item 4: every 1- and 2-bit error in the gap bytes (and the bytes around them) between replies,
+/// short replies and demands: the driver, waiting on every crate, reports no demand that no crate
+/// sent. (`E0 ^ 0x60` between crate 9's reply and crate 32's short reply made `80 20 E0`, a
+/// clean demand from crate 0 with SGL 0.)
+#[test]
+fn no_one_or_two_bit_error_in_a_gap_makes_a_phantom_demand() {
+    // Demands are reported whatever is outstanding: a driver that has seen one WAIT.
+    let mut driver: Driver<1> = Driver::new(DriverConfig::default()).unwrap();
+    assert_eq!(driver.clock(WAIT).event, None);
+    let mut cases = 0u64;
+    for first in 1..=62u8 {
+        for second in [32u8, 33, first % 62 + 1] {
+            let before = encode(&Message::Reply {
+                crate_address: first,
+                status: Status::from_bits(6),
+                data: None,
+            });
+            let demand = encode(&Message::Demand {
+                crate_address: second,
+                sgl: 7,
+            });
+            // reply, gap, short reply of `second`, gap, demand of `second`, gap.
+            let mut stream = vec![WAIT];
+            stream.extend(&before);
+            let gap_at = stream.len();
+            stream.extend([WAIT, second, WAIT, WAIT]);
+            stream.extend(&demand);
+            stream.push(WAIT);
+            let sent = [(second, 7u8)];
+            // The WAIT bytes between messages: before the reply, after it, after the short
+            // reply, after the demand.
+            let gaps = [0, gap_at, gap_at + 3, stream.len() - 1];
+            assert!(gaps.iter().all(|&g| stream[g] == WAIT));
+            for &g in &gaps {
+                // Errors with a bit in the gap byte, the other anywhere within 3 bytes either side.
+                let lo = (g.saturating_sub(3)) * 8;
+                let hi = ((g + 4).min(stream.len())) * 8;
+                for i in g * 8..g * 8 + 8 {
+                    for j in lo..hi {
+                        let bits = if i == j { vec![i] } else { vec![i, j] };
+                        let s = with_flips(&stream, &bits);
+                        let mut d = driver.clone();
+                        for &b in s.iter().chain(&[WAIT; 2]) {
+                            if let Some(DriverEvent::Demand { crate_address, sgl }) =
+                                d.clock(b).event
+                            {
+                                assert!(
+                                    sent.contains(&(crate_address, sgl)),
+                                    "{s:02x?} (bits {bits:?}): demand from crate {crate_address}, SGL {sgl}"
+                                );
+                            }
+                        }
+                        cases += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert!(cases > 100_000, "{cases}");
+}
+
+/// The attack's stream, literally.
+#[test]
+fn the_attacks_phantom_demand_is_not_a_message() {
+    let mut d: Driver<1> = Driver::new(DriverConfig::default()).unwrap();
+    for b in [WAIT, 0x89, 0x92, 0x5b, WAIT ^ 0x60, 0x20, 0xE0, WAIT] {
+        assert_eq!(d.clock(b).event, None);
+    }
+    assert_eq!(
+        decode(&[0x80, 0x20, 0xE0]),
+        Err(DecodeError::NotACrate { crate_address: 0 })
+    );
 }
