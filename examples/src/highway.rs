@@ -701,7 +701,7 @@ pub mod ports {
 
     use embedded_io_adapters::std::FromStd;
     use regler_panel_link::highway::{
-        Controller, ControllerConfig, Driver, DriverConfig, DriverEvent, Message, WAIT,
+        Controller, ControllerConfig, Driver, DriverConfig, DriverEvent, Message,
     };
     use regler_panel_link::io::{
         ControllerLink, DriverLink, IoError, clock_controller, clock_driver,

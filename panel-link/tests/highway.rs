@@ -1858,3 +1858,26 @@ fn a_byte_lost_on_the_line_can_run_a_write_with_shifted_data() {
         "the limit no longer holds: update the docs"
     );
 }
+
+/// The limit the README states: a 2-bit error inside a short reply's END (header + END, then
+/// WAIT) reads as a demand exactly for crates 1, 2, 4, 8 and 16, with SGL equal to the address —
+/// every crate 1–62 and every bit pair of the END checked.
+#[test]
+fn a_two_bit_error_in_a_short_replys_end_makes_a_demand_only_for_crates_1_2_4_8_16() {
+    let mut phantoms = Vec::new();
+    for address in 1..=62u8 {
+        for i in 0..8 {
+            for j in i + 1..8 {
+                let mut d: Driver<1> = Driver::new(DriverConfig::default()).unwrap();
+                let stream = [WAIT, address, WAIT ^ (1 << i) ^ (1 << j), WAIT, WAIT];
+                for &b in &stream {
+                    if let Some(DriverEvent::Demand { crate_address, sgl }) = d.clock(b).event {
+                        phantoms.push((crate_address, sgl));
+                    }
+                }
+            }
+        }
+    }
+    phantoms.sort_unstable();
+    assert_eq!(phantoms, [(1, 1), (2, 2), (4, 4), (8, 8), (16, 16)]);
+}

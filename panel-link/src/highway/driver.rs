@@ -72,8 +72,14 @@ impl DriverConfig {
         } else {
             controllers
         };
-        // At most 4 * 62 + 2 * 15 + 255: no overflow.
-        (controllers as u32) * 4 + 2 * (MAX_MESSAGE as u32) + gap as u32
+        // MAX_MESSAGE is 15.
+        const TWO_MESSAGES: u32 = 2 * 15;
+        const { assert!(MAX_MESSAGE == 15) };
+        // At most 4 * 62 + 30 + 255: no overflow.
+        (controllers as u32)
+            .saturating_mul(4)
+            .saturating_add(TWO_MESSAGES)
+            .saturating_add(gap as u32)
     }
 }
 

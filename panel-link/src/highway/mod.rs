@@ -77,6 +77,19 @@
 //!   looked for again.
 //! - The driver completes a command only with a reply that [`decode`]s cleanly, whose header
 //!   names that command's crate, and whose length is the one the command's function asks for.
+//! - A new controller or driver (power-up, reset) starts as after a break: junk up to the first
+//!   clean delimiter (an idle line's WAIT). It may start in the middle of a message, and a
+//!   message's tail can be a clean message of its own (a write's SN and data read as a command to
+//!   crate 32–62, a read reply's d2 d3 ENDSUM as a short reply). The driver sends one WAIT before
+//!   its first command, so controllers that start with it are in step at once.
+//!
+//! # Bytes lost or repeated (a limit)
+//! The checks are made for bit errors. A byte lost or duplicated on the line itself (a UART
+//! overrun, a receiver that missed a start bit) is a fault they do not always catch: when a write's
+//! data byte `0x3F` is lost, the SPACE after SUM slides into SUM's place, the column sum passes,
+//! and the crate runs the write with shifted data. No controller can wait for END to show the
+//! length: its reply goes out over the SPACE before END. The `io` functions (feature
+//! `embedded-io`) never lose or repeat a byte themselves.
 //!
 //! # The two guard SPACE (beyond the source)
 //! A damaged SF decides the layout: a write read as a non-write would have its SUM checked at d1,
@@ -102,6 +115,14 @@
 //!   segments; 3-bit errors sampled (20 000 cases).
 //! - An error after the addressed controller has checked the command (past its status byte) may
 //!   still let it run the command sent — never another.
+//! - A fresh controller (every address 1–62) started at any byte of 42 command shapes — 31 of
+//!   them writes whose tail from SN on is a clean command — runs nothing, then runs the next clean
+//!   command; a fresh driver started at any byte of replies whose tail is a clean reply of every
+//!   crate completes nothing.
+//! - No 1- or 2-bit error with a bit in a gap byte (WAIT between replies, short replies and
+//!   demands), the other within three bytes of it, makes the driver report a demand no crate
+//!   sent. A 2-bit error inside a short reply's END (then WAIT) reads as a demand for crates 1, 2,
+//!   4, 8 and 16 (SGL = the address): tested, every crate and bit pair.
 
 mod controller;
 mod driver;
