@@ -411,7 +411,8 @@ impl Sim {
             timeout: config.timeout(),
             retries: config.retries,
             gap: 1,
-        });
+        })
+        .map_err(|e| e.to_string())?;
         let per_crate = (0..=config.crates)
             .map(|a| CrateSummary {
                 address: a,
@@ -700,9 +701,11 @@ pub mod ports {
 
     use embedded_io_adapters::std::FromStd;
     use regler_panel_link::highway::{
-        Controller, ControllerConfig, Driver, DriverConfig, DriverEvent, Message, WAIT,
+        Controller, ControllerConfig, Driver, DriverConfig, DriverEvent, Message,
     };
-    use regler_panel_link::io::{IoError, clock_controller, clock_driver};
+    use regler_panel_link::io::{
+        ControllerLink, DriverLink, IoError, clock_controller, clock_driver,
+    };
     use serde::Serialize;
 
     use super::{REGISTER_STATIONS, SimCrate};
@@ -758,9 +761,10 @@ pub mod ports {
             })
             .map_err(|e| e.to_string())?;
             let mut dataway = SimCrate::new(u32::MAX);
+            let mut link = ControllerLink::default();
             // A read that times out is a quiet line; the run ends when the driver says so.
             while !crate_stop.load(Ordering::Relaxed) {
-                match clock_controller(&mut crate_side, &mut controller, &mut dataway) {
+                match clock_controller(&mut crate_side, &mut controller, &mut dataway, &mut link) {
                     Ok(()) | Err(IoError::Port(_)) => {}
                     Err(e) => return Err(format!("crate port: {e}")),
                 }
@@ -772,9 +776,10 @@ pub mod ports {
             timeout: 64,
             retries: 3,
             gap: 1,
-        });
+        })
+        .map_err(|e| e.to_string())?;
         let mut rng = regler_panel_link::line::Noise::new(0.0, seed).map_err(|e| e.to_string())?;
-        let mut input = WAIT;
+        let mut link = DriverLink::default();
         let (mut completed, mut failed, mut undetected) = (0u64, 0u64, 0u64);
         let mut expected: Option<(Message, Option<u32>)> = None;
         let mut written = [[0u32; 16]; REGISTER_STATIONS as usize];
@@ -807,7 +812,7 @@ pub mod ports {
                 expected = Some((command, answer));
                 issued += 1;
             }
-            match clock_driver(&mut driver_side, &mut driver, &mut input)
+            match clock_driver(&mut driver_side, &mut driver, &mut link)
                 .map_err(|e| format!("driver port: {e}"))?
             {
                 Some(DriverEvent::Completed(done)) => {

@@ -123,7 +123,8 @@ pub fn highway_loop_with_noise() -> Outcome {
         timeout: 48,
         retries: 8,
         gap: 1,
-    });
+    })
+    .map_err(|_| "driver")?;
     let mut line = WAIT;
     let mut completed = 0u32;
     for round in 0..60u32 {

@@ -5,9 +5,17 @@
 //! blocking UART does; on a PC, `embedded-io-adapters` wraps any `std::io` port such as the
 //! `serialport` crate's). Each call is one byte clock.
 //!
+//! These functions never lose or repeat a byte themselves: a byte the port did not take is kept
+//! ([`ControllerLink`], [`DriverLink`]) and written by the next call before the machine is
+//! clocked again. A byte lost or duplicated on the line itself (a UART overrun, a receiver that
+//! missed a start bit) is a fault the highway's checks do not always catch: a write whose data
+//! byte `0x3F` is lost has the SPACE that follows slide into its SUM's place, the column sum
+//! passes, and the crate runs the write with shifted data (see the [`highway`](crate::highway)
+//! module docs).
+//!
 //! ```
 //! use regler_panel_link::highway::{Controller, ControllerConfig, Cycle, Dataway};
-//! use regler_panel_link::io::clock_controller;
+//! use regler_panel_link::io::{clock_controller, ControllerLink};
 //!
 //! struct Loopback { rx: Vec<u8>, tx: Vec<u8> }
 //! impl embedded_io::ErrorType for Loopback { type Error = core::convert::Infallible; }
@@ -30,10 +38,11 @@
 //!
 //! let mut port = Loopback { rx: vec![0x02, 0xE0], tx: Vec::new() };
 //! let mut controller = Controller::new(ControllerConfig { address: 2, ..Default::default() })?;
-//! clock_controller(&mut port, &mut controller, &mut Empty)?;
-//! clock_controller(&mut port, &mut controller, &mut Empty)?;
+//! let mut link = ControllerLink::default();
+//! clock_controller(&mut port, &mut controller, &mut Empty, &mut link)?;
+//! clock_controller(&mut port, &mut controller, &mut Empty, &mut link)?;
 //! assert_eq!(port.tx, [0xE0, 0x02]); // a header for crate 2, passed on one byte late
-//! assert!(clock_controller(&mut port, &mut controller, &mut Empty).is_err()); // stream closed
+//! assert!(clock_controller(&mut port, &mut controller, &mut Empty, &mut link).is_err()); // stream closed
 //! # Ok::<(), Box<dyn core::error::Error>>(())
 //! ```
 
@@ -41,7 +50,7 @@ use core::fmt;
 
 use embedded_io::{Read, Write};
 
-use crate::highway::{Controller, Dataway, Driver, DriverEvent};
+use crate::highway::{Controller, Dataway, Driver, DriverEvent, WAIT};
 use crate::panel::{Host, Panel};
 
 /// What went wrong on the port.
@@ -104,12 +113,30 @@ pub fn write_byte<P: Write>(port: &mut P, byte: u8) -> Result<(), IoError<P::Err
     }
 }
 
+/// What a controller's port still owes the loop between calls of [`clock_controller`]: the byte
+/// the controller gave at its last clock, when the port did not take it.
+///
+/// Start with [`ControllerLink::default`] and pass the same value to every call.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ControllerLink {
+    unsent: Option<u8>,
+}
+
+impl ControllerLink {
+    /// The byte the controller gave that has not gone out yet (after a failed write).
+    #[must_use]
+    pub const fn unsent(&self) -> Option<u8> {
+        self.unsent
+    }
+}
+
 /// One byte clock of a crate controller: read the byte from upstream, write the byte for
 /// downstream.
 ///
-/// A controller gives no events: when the write fails, the byte it meant to send is lost like a
-/// byte on a noisy line (a reply byte lost makes the driver retry; the controller's counters
-/// still record the command).
+/// **It never loses or repeats a byte.** When the write fails, the byte stays in `link` and the
+/// next call writes it first; the controller is not clocked again, nor a byte read, before it went
+/// out. When the read fails, nothing was taken and the controller was not clocked. So a port that
+/// fails now and then only delays the stream; the application carries on calling.
 ///
 /// # Errors
 /// See [`read_byte`] and [`write_byte`].
@@ -117,17 +144,26 @@ pub fn clock_controller<P: Read + Write, D: Dataway + ?Sized>(
     port: &mut P,
     controller: &mut Controller,
     dataway: &mut D,
+    link: &mut ControllerLink,
 ) -> Result<(), IoError<P::Error>> {
+    if let Some(byte) = link.unsent {
+        write_byte(port, byte)?;
+        link.unsent = None;
+    }
     let input = read_byte(port)?;
-    write_byte(port, controller.clock(input, dataway))
+    let out = controller.clock(input, dataway);
+    link.unsent = Some(out);
+    write_byte(port, out)?;
+    link.unsent = None;
+    Ok(())
 }
 
 /// A port error in [`clock_driver`], with the event the driver gave at that clock.
 ///
 /// The driver has already taken its byte clock when the port fails — a command may have
-/// completed, its dataway cycle run — so the event is handed back here, never lost. The byte the
-/// driver meant to send (or the one it should have received) is lost like a byte on a noisy line:
-/// the command it belonged to is retried at its deadline.
+/// completed, its dataway cycle run — so the event is handed back here, never lost. The byte it
+/// meant to send, or the one it waits for, is not lost either: [`DriverLink`] keeps where the
+/// clock stopped, and the next call finishes it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub struct DriverClockError<E> {
@@ -149,8 +185,52 @@ impl<E: fmt::Debug> fmt::Display for DriverClockError<E> {
 
 impl<E: fmt::Debug> core::error::Error for DriverClockError<E> {}
 
-/// One byte clock of the driver in lock-step with the loop: `input` is the byte that came back
-/// last clock; the driver's byte is written, and the byte that comes back replaces `input`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum DriverPhase {
+    /// The input of the next clock is here.
+    Clock(u8),
+    /// The clock is taken; its byte is still to be written.
+    Write(u8),
+    /// Written; the port is still to be flushed.
+    Flush,
+    /// Flushed; the byte coming back is still to be read.
+    Read,
+}
+
+/// Where [`clock_driver`] stands between calls: the byte that came back last clock, or the part
+/// of the last clock a port error interrupted.
+///
+/// Start with [`DriverLink::default`] (an idle line: WAIT) and pass the same value to every call.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DriverLink {
+    phase: DriverPhase,
+}
+
+impl Default for DriverLink {
+    fn default() -> Self {
+        Self {
+            phase: DriverPhase::Clock(WAIT),
+        }
+    }
+}
+
+impl DriverLink {
+    /// True when a port error interrupted the last clock and the next call finishes it.
+    #[must_use]
+    pub const fn interrupted(&self) -> bool {
+        !matches!(self.phase, DriverPhase::Clock(_))
+    }
+}
+
+/// One byte clock of the driver in lock-step with the loop: the driver takes the byte that came
+/// back last clock, its byte is written and flushed, and the byte that comes back is read.
+///
+/// **It never loses or repeats a byte.** When the port fails, `link` keeps where the clock
+/// stopped, and the next call finishes that clock — writes the byte not written, flushes, reads
+/// the byte not read — and returns `Ok(None)` without clocking the driver; the call after it
+/// clocks it again. The driver is never clocked before the byte it gave went out and the byte
+/// that came back was read, and never given a received byte twice. So a port that fails now and
+/// then only delays the stream; the application carries on calling.
 ///
 /// # Errors
 /// See [`read_byte`] and [`write_byte`]; the error carries the event the driver gave at this
@@ -158,17 +238,29 @@ impl<E: fmt::Debug> core::error::Error for DriverClockError<E> {}
 pub fn clock_driver<P: Read + Write, const W: usize>(
     port: &mut P,
     driver: &mut Driver<W>,
-    input: &mut u8,
+    link: &mut DriverLink,
 ) -> Result<Option<DriverEvent>, DriverClockError<P::Error>> {
-    let step = driver.clock(*input);
-    let with_event = |error| DriverClockError {
-        error,
-        event: step.event,
-    };
-    write_byte(port, step.transmit).map_err(with_event)?;
-    port.flush().map_err(|e| with_event(IoError::Port(e)))?;
-    *input = read_byte(port).map_err(with_event)?;
-    Ok(step.event)
+    let mut event = None;
+    if let DriverPhase::Clock(input) = link.phase {
+        let step = driver.clock(input);
+        event = step.event;
+        link.phase = DriverPhase::Write(step.transmit);
+    } else {
+        // Finish the interrupted clock only.
+    }
+    let with_event = |error| DriverClockError { error, event };
+    if let DriverPhase::Write(byte) = link.phase {
+        write_byte(port, byte).map_err(with_event)?;
+        link.phase = DriverPhase::Flush;
+    }
+    if link.phase == DriverPhase::Flush {
+        port.flush().map_err(|e| with_event(IoError::Port(e)))?;
+        link.phase = DriverPhase::Read;
+    }
+    if link.phase == DriverPhase::Read {
+        link.phase = DriverPhase::Clock(read_byte(port).map_err(with_event)?);
+    }
+    Ok(event)
 }
 
 /// The host's transmitter is ready: writes the next sequence byte, if the host is sending.
@@ -292,12 +384,12 @@ mod tests {
                 writes: 0,
                 fail_from,
             };
-            let mut driver: Driver<1> = Driver::new(DriverConfig::default());
+            let mut driver: Driver<1> = Driver::new(DriverConfig::default()).unwrap();
             driver.submit(read).unwrap();
-            let mut input = crate::highway::WAIT;
+            let mut link = DriverLink::default();
             let mut completed = std::vec::Vec::new();
             for clock in 0..100u32 {
-                let event = match clock_driver(&mut port, &mut driver, &mut input) {
+                let event = match clock_driver(&mut port, &mut driver, &mut link) {
                     Ok(event) => event,
                     Err(e) => {
                         assert_eq!(e.error, IoError::Port(Broken));

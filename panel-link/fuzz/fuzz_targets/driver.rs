@@ -49,7 +49,8 @@ fuzz_target!(|data: &[u8]| {
         timeout: 1_000_000,
         retries: 0,
         gap: 1,
-    });
+    })
+    .unwrap();
     for address in 1..=62 {
         driver.submit(outstanding(address)).unwrap();
     }
@@ -69,11 +70,13 @@ fuzz_target!(|data: &[u8]| {
     let mut crate_ = Crate(u32::from_le_bytes([head[1], head[2], head[3], 0]));
     let mut buf = [0u8; MAX_MESSAGE];
     let len = outstanding(address).encode(&mut buf).unwrap();
-    let mut segment: Vec<u8> = buf[..len]
+    // One WAIT first: a fresh controller reads nothing before a clean delimiter.
+    let mut segment: Vec<u8> = [WAIT]
         .iter()
+        .chain(&buf[..len])
         .chain(&[WAIT; 2])
         .map(|&b| controller.clock(b, &mut crate_))
-        .skip(1)
+        .skip(2)
         .collect();
     // The reply it meant: the bytes from its header (at its second occurrence) to its ENDSUM.
     let start = segment.iter().skip(1).position(|&b| b == segment[0]).unwrap() + 1;

@@ -123,7 +123,10 @@ enum Rx {
 /// It follows every message's layout, its own and those it passes on: a delimiter where the
 /// layout allows no end is a break, and everything up to the next clean delimiter is junk —
 /// passed on unread, or, in a command for this crate, replaced by WAIT (no reply, DERR in the
-/// next one). So the tail of a damaged message is never read as a command.
+/// next one). So the tail of a damaged message is never read as a command. A new controller
+/// (after power-up or a reset) starts the same way, as after a break: it reads nothing before the
+/// first clean delimiter — on an idle line the first WAIT — so the tail of a command that was
+/// passing when it restarted is never read as a command either.
 ///
 /// ```
 /// use regler_panel_link::highway::{decode, Controller, ControllerConfig, Cycle, Dataway, Message, Status, MAX_MESSAGE};
@@ -141,10 +144,12 @@ enum Rx {
 /// let write = Message::Command { crate_address: 3, station: 1, subaddress: 0, function: 16, data: Some(0x1234) };
 /// let mut buf = [0u8; MAX_MESSAGE];
 /// let len = write.encode(&mut buf)?;
-/// let out: Vec<u8> = buf[..len].iter().chain(&[0xE0]).map(|&b| controller.clock(b, &mut crate_)).collect();
+/// // A fresh controller reads nothing before the first clean delimiter: an idle line's WAIT.
+/// let line = [0xE0].iter().chain(&buf[..len]).chain(&[0xE0]);
+/// let out: Vec<u8> = line.map(|&b| controller.clock(b, &mut crate_)).collect();
 /// // One byte late: header, END (the short reply), WAITs, then the reply over the SPACEs.
-/// assert_eq!(&out[1..3], &[buf[0], 0xE0]);
-/// assert_eq!(decode(&out[10..13]), Ok(Message::Reply { crate_address: 3, status: Status { x: true, q: true, ..Status::default() }, data: None }));
+/// assert_eq!(&out[2..4], &[buf[0], 0xE0]);
+/// assert_eq!(decode(&out[11..14]), Ok(Message::Reply { crate_address: 3, status: Status { x: true, q: true, ..Status::default() }, data: None }));
 /// assert_eq!(crate_.0, 0x1234);
 /// # Ok::<(), Box<dyn core::error::Error>>(())
 /// ```
@@ -181,7 +186,8 @@ pub struct Controller {
 }
 
 impl Controller {
-    /// A controller for the crate at `config.address`.
+    /// A controller for the crate at `config.address`. It reads nothing as a message before the
+    /// first clean delimiter it receives (see above).
     ///
     /// # Errors
     /// [`ConfigError::Address`] unless the address is 1–62.
@@ -517,6 +523,14 @@ mod tests {
         }
     }
 
+    /// A fresh controller that has seen one WAIT (a fresh controller reads nothing before the
+    /// first clean delimiter).
+    fn synced(config: ControllerConfig) -> Controller {
+        let mut c = Controller::new(config).unwrap();
+        c.clock(WAIT, &mut Crate::default());
+        c
+    }
+
     fn run(c: &mut Controller, crate_: &mut Crate, input: &[u8]) -> Vec<u8> {
         input
             .iter()
@@ -563,11 +577,10 @@ mod tests {
 
     #[test]
     fn read_is_answered_over_the_spaces_with_one_byte_of_delay() {
-        let mut c = Controller::new(ControllerConfig {
+        let mut c = synced(ControllerConfig {
             address: 7,
             demand_repeat: 0,
-        })
-        .unwrap();
+        });
         let mut crate_ = Crate {
             regs: [0x12_3456, 0, 0, 0],
             ..Crate::default()
@@ -608,11 +621,10 @@ mod tests {
 
     #[test]
     fn other_crates_messages_pass_unchanged_one_byte_late() {
-        let mut c = Controller::new(ControllerConfig {
+        let mut c = synced(ControllerConfig {
             address: 7,
             demand_repeat: 0,
-        })
-        .unwrap();
+        });
         let mut crate_ = Crate::default();
         let mut stream = encode(Message::Command {
             crate_address: 8,
@@ -638,11 +650,10 @@ mod tests {
 
     #[test]
     fn a_corrupt_command_is_answered_with_err_and_not_run_then_derr() {
-        let mut c = Controller::new(ControllerConfig {
+        let mut c = synced(ControllerConfig {
             address: 7,
             demand_repeat: 0,
-        })
-        .unwrap();
+        });
         let mut crate_ = Crate::default();
         let mut cmd = encode(Message::Command {
             crate_address: 7,
@@ -696,11 +707,10 @@ mod tests {
 
     #[test]
     fn demand_goes_out_between_messages_and_the_delay_shrinks_back() {
-        let mut c = Controller::new(ControllerConfig {
+        let mut c = synced(ControllerConfig {
             address: 5,
             demand_repeat: 0,
-        })
-        .unwrap();
+        });
         let mut crate_ = Crate::default();
         let passing = encode(Message::Reply {
             crate_address: 9,

@@ -14,10 +14,15 @@ use super::{
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct DriverConfig {
-    /// Byte clocks after a command's last byte before it counts as lost. Make it longer than the
-    /// loop's round trip (controllers × 4 bytes of delay at most, plus two messages of at most
-    /// [`MAX_MESSAGE`] bytes and the gap), so a reply
-    /// can never arrive after its command was given up or sent again.
+    /// Byte clocks after a command's last byte before it counts as lost. It must be longer than
+    /// the loop's round trip — 4 byte clocks per controller (one of delay, three held behind a
+    /// demand) plus two messages of [`MAX_MESSAGE`] bytes and the gap; [`DriverConfig::for_loop`]
+    /// computes that. [`Driver::new`] refuses a time-out below what the shortest loop (one
+    /// controller) needs ([`DriverConfig::least_timeout`]), but it cannot know how many
+    /// controllers are on the loop: **a time-out shorter than the actual loop's round trip gives
+    /// wrong answers, not only retries** — the command is sent again while its reply is still on
+    /// the way, and that late reply (replies carry no tag, only the crate address) completes the
+    /// resend, or the crate's next command, with the data of an earlier cycle.
     pub timeout: u32,
     /// How many times a command is sent again before it fails. A resend waits for the attempt's
     /// deadline even after an ERR reply or an unanswered return (see [`Driver`]).
@@ -25,6 +30,57 @@ pub struct DriverConfig {
     /// WAIT bytes after each command (room for the controllers' demands; 0 is allowed: a
     /// controller also sends a demand right after a message).
     pub gap: u8,
+}
+
+impl DriverConfig {
+    /// The least time-out [`Driver::new`] accepts with this configuration's gap: the round trip of
+    /// a loop of one controller — two messages of [`MAX_MESSAGE`] bytes, the gap and 4 byte clocks
+    /// of delay.
+    #[must_use]
+    pub const fn least_timeout(&self) -> u32 {
+        Self::round_trip(1, self.gap)
+    }
+
+    /// A configuration for a loop of `controllers` crate controllers (1–62; more are counted as
+    /// 62, none as one): the time-out is the loop's longest round trip, 4 byte clocks per
+    /// controller plus two messages of [`MAX_MESSAGE`] bytes and the gap; 3 retries, a gap of 1.
+    ///
+    /// ```
+    /// use regler_panel_link::highway::{Driver, DriverConfig};
+    ///
+    /// let config = DriverConfig::for_loop(20);
+    /// assert_eq!(config.timeout, 4 * 20 + 2 * 15 + 1);
+    /// let _driver: Driver<4> = Driver::new(config)?;
+    /// assert!(Driver::<4>::new(regler_panel_link::highway::DriverConfig { timeout: 1, ..config }).is_err());
+    /// # Ok::<(), Box<dyn core::error::Error>>(())
+    /// ```
+    #[must_use]
+    pub const fn for_loop(controllers: u8) -> Self {
+        let gap = 1;
+        Self {
+            timeout: Self::round_trip(controllers, gap),
+            retries: 3,
+            gap,
+        }
+    }
+
+    const fn round_trip(controllers: u8, gap: u8) -> u32 {
+        let controllers = if controllers == 0 {
+            1
+        } else if controllers > 62 {
+            62
+        } else {
+            controllers
+        };
+        // MAX_MESSAGE is 15.
+        const TWO_MESSAGES: u32 = 2 * 15;
+        const { assert!(MAX_MESSAGE == 15) };
+        // At most 4 * 62 + 30 + 255: no overflow.
+        (controllers as u32)
+            .saturating_mul(4)
+            .saturating_add(TWO_MESSAGES)
+            .saturating_add(gap as u32)
+    }
 }
 
 impl Default for DriverConfig {
@@ -53,6 +109,14 @@ pub enum DriverError {
     CrateBusy(u8),
     /// Every slot of the window is taken.
     WindowFull,
+    /// [`DriverConfig::timeout`] is shorter than the round trip of even a one-controller loop
+    /// ([`DriverConfig::least_timeout`]): late replies would complete the wrong command.
+    TimeoutTooShort {
+        /// The time-out given.
+        timeout: u32,
+        /// The least accepted with that gap.
+        least: u32,
+    },
 }
 
 impl fmt::Display for DriverError {
@@ -63,6 +127,10 @@ impl fmt::Display for DriverError {
             Self::NoReplyPossible(a) => write!(f, "crate address {a} never replies (use 1..=62)"),
             Self::CrateBusy(a) => write!(f, "crate {a} already has a command outstanding"),
             Self::WindowFull => f.write_str("every slot of the driver's window is taken"),
+            Self::TimeoutTooShort { timeout, least } => write!(
+                f,
+                "time-out {timeout} byte clocks is shorter than the round trip of a one-controller loop ({least}); a late reply would complete the wrong command (use DriverConfig::for_loop)"
+            ),
         }
     }
 }
@@ -201,7 +269,7 @@ struct Slot {
 /// ```
 /// use regler_panel_link::highway::{Driver, DriverConfig, DriverEvent, Message};
 ///
-/// let mut driver: Driver<4> = Driver::new(DriverConfig::default());
+/// let mut driver: Driver<4> = Driver::new(DriverConfig::default())?;
 /// let tag = driver.submit(Message::Command { crate_address: 9, station: 1, subaddress: 0, function: 0, data: None })?;
 /// // An empty loop: the command comes straight back, unanswered, every time.
 /// let mut line = 0xE0;
@@ -232,21 +300,36 @@ pub struct Driver<const W: usize> {
 }
 
 impl<const W: usize> Driver<W> {
-    /// A driver with nothing outstanding.
-    #[must_use]
-    pub const fn new(config: DriverConfig) -> Self {
+    /// A driver with nothing outstanding. It starts as after a break: it reads nothing as a
+    /// message before the first clean delimiter (an idle line gives one at once), so after a
+    /// restart the tail of a reply on its way back is never taken for a reply.
+    ///
+    /// # Errors
+    /// [`DriverError::TimeoutTooShort`] when `config.timeout` is below
+    /// [`DriverConfig::least_timeout`].
+    pub const fn new(config: DriverConfig) -> Result<Self, DriverError> {
         const { assert!(W > 0, "a driver needs a window of at least one command") };
-        Self {
+        let least = config.least_timeout();
+        if config.timeout < least {
+            return Err(DriverError::TimeoutTooShort {
+                timeout: config.timeout,
+                least,
+            });
+        }
+        Ok(Self {
             config,
             slots: Vec::new(),
             tx: [WAIT; MAX_MESSAGE],
             tx_len: 0,
             tx_pos: 0,
-            gap_left: 0,
+            // One WAIT before the first message: crate controllers that start with the driver
+            // read nothing before a clean delimiter.
+            gap_left: 1,
             rx: [WAIT; MAX_DECODE],
             rx_len: 0,
             framer: Framer::new(),
-            junk: false,
+            // It starts in junk (see `Framer::new`), which is not a detected error.
+            junk: true,
             next_tag: 0,
             stats: DriverStats {
                 sent: 0,
@@ -262,7 +345,7 @@ impl<const W: usize> Driver<W> {
                 demands: 0,
                 clocks: 0,
             },
-        }
+        })
     }
 
     /// The counters.
@@ -529,7 +612,7 @@ mod tests {
 
     #[test]
     fn submit_refuses_what_cannot_be_answered() {
-        let mut d: Driver<1> = Driver::new(DriverConfig::default());
+        let mut d: Driver<1> = Driver::new(DriverConfig::default()).unwrap();
         let cmd = |crate_address| Message::Command {
             crate_address,
             station: 1,
@@ -554,7 +637,7 @@ mod tests {
 
     #[test]
     fn a_loop_of_three_crates_answers_every_command() {
-        let mut d: Driver<3> = Driver::new(DriverConfig::default());
+        let mut d: Driver<3> = Driver::new(DriverConfig::default()).unwrap();
         let mut crates: std::vec::Vec<Controller> = (1..=3)
             .map(|a| {
                 Controller::new(ControllerConfig {
@@ -607,7 +690,8 @@ mod tests {
             timeout: 100,
             retries: 3,
             gap: 1,
-        });
+        })
+        .unwrap();
         let cmd = Message::Command {
             crate_address: 2,
             station: 1,

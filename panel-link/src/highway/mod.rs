@@ -35,6 +35,11 @@
 //!   exactly that many ([`min_spaces`]).
 //! - Reply: header, status, \[4 data bytes for F0–F7\], ENDSUM (3 or 7 bytes).
 //! - Demand: header, SGL, ENDSUM (3 bytes).
+//! - Replies and demands come only from crates 1–62, and a demand's SGL is never 0 (a controller
+//!   sends none then): [`decode`] refuses a reply or demand from crate 0 or 63 and a demand with
+//!   SGL 0 ([`DecodeError::NotACrate`], [`DecodeError::SglZero`]), [`Message::encode`] makes none.
+//!   A 2-bit error in a WAIT before a short reply of crate 32 (`E0 ^ 0x60`, `20`, `E0`) reads as
+//!   exactly such a demand from crate 0.
 //! - A truncated command or short reply, header + END, is not a message: [`decode`] names it
 //!   ([`DecodeError::Truncated`]).
 //!
@@ -72,6 +77,19 @@
 //!   looked for again.
 //! - The driver completes a command only with a reply that [`decode`]s cleanly, whose header
 //!   names that command's crate, and whose length is the one the command's function asks for.
+//! - A new controller or driver (power-up, reset) starts as after a break: junk up to the first
+//!   clean delimiter (an idle line's WAIT). It may start in the middle of a message, and a
+//!   message's tail can be a clean message of its own (a write's SN and data read as a command to
+//!   crate 32–62, a read reply's d2 d3 ENDSUM as a short reply). The driver sends one WAIT before
+//!   its first command, so controllers that start with it are in step at once.
+//!
+//! # Bytes lost or repeated (a limit)
+//! The checks are made for bit errors. A byte lost or duplicated on the line itself (a UART
+//! overrun, a receiver that missed a start bit) is a fault they do not always catch: when a write's
+//! data byte `0x3F` is lost, the SPACE after SUM slides into SUM's place, the column sum passes,
+//! and the crate runs the write with shifted data. No controller can wait for END to show the
+//! length: its reply goes out over the SPACE before END. The `io` functions (feature
+//! `embedded-io`) never lose or repeat a byte themselves.
 //!
 //! # The two guard SPACE (beyond the source)
 //! A damaged SF decides the layout: a write read as a non-write would have its SUM checked at d1,
@@ -97,6 +115,14 @@
 //!   segments; 3-bit errors sampled (20 000 cases).
 //! - An error after the addressed controller has checked the command (past its status byte) may
 //!   still let it run the command sent — never another.
+//! - A fresh controller (every address 1–62) started at any byte of 42 command shapes — 31 of
+//!   them writes whose tail from SN on is a clean command — runs nothing, then runs the next clean
+//!   command; a fresh driver started at any byte of replies whose tail is a clean reply of every
+//!   crate completes nothing.
+//! - No 1- or 2-bit error with a bit in a gap byte (WAIT between replies, short replies and
+//!   demands), the other within three bytes of it, makes the driver report a demand no crate
+//!   sent. A 2-bit error inside a short reply's END (then WAIT) reads as a demand for crates 1, 2,
+//!   4, 8 and 16 (SGL = the address): tested, every crate and bit pair.
 
 mod controller;
 mod driver;
@@ -287,6 +313,10 @@ pub enum EncodeError {
     Sgl(u8),
     /// Data does not fit 24 bits.
     Data(u32),
+    /// A reply or demand from crate 0 (the driver) or 63 (no crate): only crates 1–62 send them.
+    NotACrate(u8),
+    /// A demand with SGL 0 asks for nothing: it is not a message.
+    SglZero,
     /// A write function (F16–F23) without data, or data with any other function.
     DataPresence {
         /// The function.
@@ -310,6 +340,11 @@ impl fmt::Display for EncodeError {
             Self::Function(v) => write!(f, "function must be 0..=31, got {v}"),
             Self::Sgl(v) => write!(f, "SGL must be 0..=31, got {v}"),
             Self::Data(v) => write!(f, "data must fit 24 bits, got {v:#x}"),
+            Self::NotACrate(v) => write!(
+                f,
+                "replies and demands come from crates 1..=62, got crate {v}"
+            ),
+            Self::SglZero => f.write_str("a demand needs a non-zero SGL (1..=31)"),
             Self::DataPresence {
                 function,
                 has_data: true,
@@ -389,6 +424,17 @@ pub enum DecodeError {
         /// The byte.
         byte: u8,
     },
+    /// A reply or demand whose header names crate 0 (the driver) or 63 (no crate): only crates
+    /// 1–62 send them.
+    NotACrate {
+        /// The header's crate address.
+        crate_address: u8,
+    },
+    /// A demand with SGL 0: it asks for nothing (a controller sends none).
+    SglZero {
+        /// The header's crate address.
+        crate_address: u8,
+    },
 }
 
 impl fmt::Display for DecodeError {
@@ -423,6 +469,16 @@ impl fmt::Display for DecodeError {
                 write!(f, "byte {index} of a command's reply room is not SPACE")
             }
             Self::NotEnd { byte } => write!(f, "a command must end with END, got {byte:#04x}"),
+            Self::NotACrate { crate_address } => write!(
+                f,
+                "a reply or demand from crate {crate_address}: only crates 1..=62 send them"
+            ),
+            Self::SglZero { crate_address } => {
+                write!(
+                    f,
+                    "a demand with SGL 0 from crate {crate_address} asks for nothing"
+                )
+            }
         }
     }
 }
@@ -542,10 +598,21 @@ impl Message {
                 }
                 data
             }
-            Self::Reply { data, .. } => data,
+            Self::Reply { data, .. } => {
+                if crate_address == 0 || crate_address == NON_ADDRESSED {
+                    return Err(EncodeError::NotACrate(crate_address));
+                }
+                data
+            }
             Self::Demand { sgl, .. } => {
+                if crate_address == 0 || crate_address == NON_ADDRESSED {
+                    return Err(EncodeError::NotACrate(crate_address));
+                }
                 if sgl > 31 {
                     return Err(EncodeError::Sgl(sgl));
+                }
+                if sgl == 0 {
+                    return Err(EncodeError::SglZero);
                 }
                 None
             }
@@ -627,7 +694,8 @@ pub const MAX_DECODE: usize = 9 + 1 + 64 + 1;
 
 /// Decodes one message, from its header to its END or ENDSUM byte inclusive, checking every rule:
 /// length, row parity of every byte, the delimiter bit of every byte, the fixed bits, the layout
-/// of the message type, the column sum, the SPACE run and the END byte.
+/// of the message type, the column sum, the sender (a reply or demand comes from a crate 1–62, a
+/// demand has a non-zero SGL), the SPACE run and the END byte.
 ///
 /// ```
 /// use regler_panel_link::highway::{decode, DecodeError, Message, Status};
@@ -678,10 +746,12 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
             });
         }
         check_sum(bytes, 2)?;
-        return Ok(Message::Demand {
-            crate_address,
-            sgl: second & 0x1F,
-        });
+        sender(crate_address)?;
+        let sgl = second & 0x1F;
+        if sgl == 0 {
+            return Err(DecodeError::SglZero { crate_address });
+        }
+        return Ok(Message::Demand { crate_address, sgl });
     }
     if second & M1 != 0 {
         let data = match len {
@@ -695,6 +765,7 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
             }
         };
         check_sum(bytes, last)?;
+        sender(crate_address)?;
         return Ok(Message::Reply {
             crate_address,
             status: Status::from_bits(second),
@@ -804,9 +875,13 @@ pub(crate) struct Framer {
 }
 
 impl Framer {
+    /// A reader that starts as after a break: junk up to the first clean delimiter. A machine
+    /// that (re)starts may be in the middle of a message, and a message's tail can be a clean
+    /// message of its own (a write's SN and data read as a command to crate 32–62); an idle
+    /// line's first WAIT ends the junk at once.
     pub(crate) const fn new() -> Self {
         Self {
-            state: FrameState::Between,
+            state: FrameState::Junk,
         }
     }
 
@@ -889,6 +964,15 @@ impl Layout {
             Self::Reply if index < 6 => Some(self),
             Self::Reply | Self::Demand => None,
         }
+    }
+}
+
+/// Replies and demands come only from crates 1–62.
+const fn sender(crate_address: u8) -> Result<(), DecodeError> {
+    if crate_address == 0 || crate_address == NON_ADDRESSED {
+        Err(DecodeError::NotACrate { crate_address })
+    } else {
+        Ok(())
     }
 }
 
