@@ -131,22 +131,47 @@ impl fmt::Display for RegisterError {
 
 impl core::error::Error for RegisterError {}
 
+/// The smallest [`HostConfig::key_timeout_polls`]: 6 polls.
+///
+/// A panel that samples SÄN every 20 ms sends the key byte up to 20 ms after SÄN rises and
+/// repeats it 20 ms later; the second byte has arrived one byte time (2.3 ms at 4 800 baud, 11
+/// bits) after that: up to 42.3 ms after SÄN rose. The host counts polls from the rise, and
+/// its first poll may come at once, so its `n`-th poll may come `(n − 1) · 10` ms after the
+/// rise: 5 polls may give up at 40 ms, before the second byte; 6 polls wait at least 50 ms.
+pub const MIN_KEY_TIMEOUT_POLLS: u16 = 6;
+
+/// The smallest [`HostConfig::mot_stuck_polls`]: 3 polls, the least the host keeps SÄN low
+/// after a key exchange (the third poll comes more than 20 ms after SÄN fell).
+pub const MIN_MOT_STUCK_POLLS: u16 = 3;
+
 /// Why a host configuration was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum ConfigError {
-    /// `key_timeout_polls` must be at least 1.
-    KeyTimeout,
-    /// `mot_stuck_polls` must be at least 1.
-    MotStuck,
+    /// `key_timeout_polls` below [`MIN_KEY_TIMEOUT_POLLS`]: the host would give up on keys
+    /// before a panel sampling SÄN every 20 ms has sent the key byte twice, on a clean line.
+    KeyTimeout(u16),
+    /// `mot_stuck_polls` below [`MIN_MOT_STUCK_POLLS`]: the host keeps SÄN low for that many
+    /// polls after every key exchange, whatever MOT does.
+    MotStuck(u16),
 }
 
 impl fmt::Display for ConfigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::KeyTimeout => f.write_str("key_timeout_polls must be at least 1"),
-            Self::MotStuck => f.write_str("mot_stuck_polls must be at least 1"),
+        match *self {
+            Self::KeyTimeout(polls) => write!(
+                f,
+                "key_timeout_polls {polls} is below {MIN_KEY_TIMEOUT_POLLS}: the second key byte \
+                 of a panel sampling SÄN every 20 ms arrives up to 42.3 ms after SÄN rises, and \
+                 poll 5 may come 40 ms after it (keys lost on a clean line)"
+            ),
+            Self::MotStuck(polls) => write!(
+                f,
+                "mot_stuck_polls {polls} is below {MIN_MOT_STUCK_POLLS}: the host keeps SÄN low \
+                 for 3 polls (over 20 ms) after a key exchange, so that a panel sampling SÄN \
+                 every 20 ms sees it low"
+            ),
         }
     }
 }
@@ -159,9 +184,11 @@ impl core::error::Error for ConfigError {}
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct HostConfig {
     /// Polls with SÄN up without two equal bytes before the key is given up (default 10 =
-    /// 100 ms: five repeats of the key).
+    /// 100 ms: five repeats of the key; at least [`MIN_KEY_TIMEOUT_POLLS`]).
     pub key_timeout_polls: u16,
-    /// Polls waiting for MOT to drop before the host refreshes again regardless (default 100).
+    /// Polls waiting for MOT to drop after a key exchange before the host refreshes again
+    /// regardless (default 100; at least [`MIN_MOT_STUCK_POLLS`]); a MOT still high then is
+    /// ignored for as many polls more, or until it reads low.
     ///
     /// `key_timeout_polls + mot_stuck_polls` polls is the longest a key exchange lasts, so the
     /// panel shows a new sequence at least every `R + 3` byte times plus that many polls.
@@ -213,8 +240,8 @@ enum HostState {
     Sending { next: usize },
     /// SÄN up, listening.
     AwaitKey { polls: u16, last: Option<u8> },
-    /// SÄN dropped, waiting for MOT to drop.
-    AwaitMotLow { polls: u16 },
+    /// SÄN dropped `polls` polls ago; `low`: MOT has read low since.
+    AwaitMotLow { polls: u16, low: bool },
 }
 
 /// The computer's side of one panel's link, with `R` registers (7, 29 or 46 in the source).
@@ -246,7 +273,8 @@ pub struct Host<const R: usize> {
     state: HostState,
     /// MOT as the last poll saw it (false while a stuck MOT is ignored).
     mot: bool,
-    ignore_mot: bool,
+    /// Polls a stuck MOT is still ignored for (until it reads low).
+    ignore_polls: u16,
     /// The reset byte closing a sequence has just gone out: a waiting key may be taken now.
     between: bool,
     /// The registers of a sequence have gone out: the next reset byte completes it.
@@ -260,14 +288,15 @@ impl<const R: usize> Host<R> {
     /// A host with every register 0, about to send a reset byte.
     ///
     /// # Errors
-    /// A time-out of 0 polls.
+    /// [`ConfigError`]: a key time-out below [`MIN_KEY_TIMEOUT_POLLS`] or a MOT time-out below
+    /// [`MIN_MOT_STUCK_POLLS`], with the value.
     pub const fn new(config: HostConfig) -> Result<Self, ConfigError> {
         const { assert!(R > 0, "a panel has at least one register") };
-        if config.key_timeout_polls == 0 {
-            return Err(ConfigError::KeyTimeout);
+        if config.key_timeout_polls < MIN_KEY_TIMEOUT_POLLS {
+            return Err(ConfigError::KeyTimeout(config.key_timeout_polls));
         }
-        if config.mot_stuck_polls == 0 {
-            return Err(ConfigError::MotStuck);
+        if config.mot_stuck_polls < MIN_MOT_STUCK_POLLS {
+            return Err(ConfigError::MotStuck(config.mot_stuck_polls));
         }
         Ok(Self {
             config,
@@ -275,7 +304,7 @@ impl<const R: usize> Host<R> {
             sending: [0; R],
             state: HostState::Sending { next: 0 },
             mot: false,
-            ignore_mot: false,
+            ignore_polls: 0,
             between: false,
             open: false,
             gap: false,
@@ -380,38 +409,54 @@ impl<const R: usize> Host<R> {
     }
 
     /// The 10 ms MOT poll, with the MOT line's state.
+    ///
+    /// After a key exchange (a key taken or given up) SÄN stays low until MOT has read low on
+    /// some poll since SÄN fell **and** at least [`MIN_MOT_STUCK_POLLS`] (3) polls have passed,
+    /// or until [`HostConfig::mot_stuck_polls`] polls have passed; then the host sends a whole
+    /// sequence before it can raise SÄN again. The third poll comes more than 20 ms after SÄN
+    /// fell, so SÄN stays low for more than 20 ms whatever MOT does: a panel that samples SÄN at
+    /// least every 20 ms sees the key taken before SÄN rises again, and **no key is delivered
+    /// twice, however the MOT line lies**. A MOT still high after `mot_stuck_polls` is ignored
+    /// for `mot_stuck_polls` polls more, or until it reads low.
     pub fn poll_mot(&mut self, mot: bool) -> Option<HostEvent> {
-        if !mot {
-            self.ignore_mot = false;
+        if mot {
+            self.ignore_polls = self.ignore_polls.saturating_sub(1);
+            self.mot = self.ignore_polls == 0;
+        } else {
+            self.ignore_polls = 0;
+            self.mot = false;
         }
-        self.mot = mot && !self.ignore_mot;
         match self.state {
             HostState::Sending { .. } => None, // MOT is looked at between sequences only
             HostState::AwaitKey { polls, last } => {
                 let polls = polls.saturating_add(1);
                 if polls >= self.config.key_timeout_polls {
                     self.stats.key_timeouts = self.stats.key_timeouts.saturating_add(1);
-                    self.state = HostState::AwaitMotLow { polls: 0 };
+                    self.state = HostState::AwaitMotLow {
+                        polls: 0,
+                        low: false,
+                    };
                     return Some(HostEvent::KeyTimedOut);
                 }
                 self.state = HostState::AwaitKey { polls, last };
                 None
             }
-            HostState::AwaitMotLow { polls } => {
+            HostState::AwaitMotLow { polls, low } => {
+                let polls = polls.saturating_add(1);
+                let low = low || !mot;
                 // Back to the registers where they stopped: right after a reset byte, so the
                 // next sequence goes out whole before MOT is looked at again.
-                if !mot {
+                if low && polls >= MIN_MOT_STUCK_POLLS {
                     self.state = HostState::Sending { next: 1 };
                     return None;
                 }
-                let polls = polls.saturating_add(1);
                 if polls >= self.config.mot_stuck_polls {
-                    self.ignore_mot = true;
+                    self.ignore_polls = self.config.mot_stuck_polls;
                     self.mot = false;
                     self.state = HostState::Sending { next: 1 };
                     return Some(HostEvent::MotStuck);
                 }
-                self.state = HostState::AwaitMotLow { polls };
+                self.state = HostState::AwaitMotLow { polls, low };
                 None
             }
         }
@@ -430,7 +475,10 @@ impl<const R: usize> Host<R> {
             }
             Ok(key) if last == Some(key) => {
                 self.stats.keys = self.stats.keys.saturating_add(1);
-                self.state = HostState::AwaitMotLow { polls: 0 };
+                self.state = HostState::AwaitMotLow {
+                    polls: 0,
+                    low: false,
+                };
                 Some(HostEvent::Key(key))
             }
             Ok(key) => {
@@ -663,20 +711,23 @@ mod tests {
         assert_eq!(host.set(0, RESET), Err(RegisterError::Value(RESET)));
         assert_eq!(host.set(6, 127), Ok(()));
         assert_eq!(host.registers(), &[0, 0, 0, 0, 0, 0, 127]);
-        assert!(
-            Host::<7>::new(HostConfig {
-                key_timeout_polls: 0,
-                mot_stuck_polls: 1
-            })
-            .is_err()
-        );
-        assert!(
-            Host::<7>::new(HostConfig {
-                key_timeout_polls: 1,
-                mot_stuck_polls: 0
-            })
-            .is_err()
-        );
+        let config = |key_timeout_polls, mot_stuck_polls| HostConfig {
+            key_timeout_polls,
+            mot_stuck_polls,
+        };
+        // The boundaries: 6 polls of key time-out, 2 of MOT time-out.
+        for kt in 0..MIN_KEY_TIMEOUT_POLLS {
+            let e = Host::<7>::new(config(kt, 100)).unwrap_err();
+            assert_eq!(e, ConfigError::KeyTimeout(kt));
+            assert!(e.to_string().contains("below 6"), "{e}");
+        }
+        assert!(Host::<7>::new(config(MIN_KEY_TIMEOUT_POLLS, 100)).is_ok());
+        for ms in 0..MIN_MOT_STUCK_POLLS {
+            let e = Host::<7>::new(config(10, ms)).unwrap_err();
+            assert_eq!(e, ConfigError::MotStuck(ms));
+            assert!(e.to_string().contains("sees it low"), "{e}");
+        }
+        assert!(Host::<7>::new(config(10, MIN_MOT_STUCK_POLLS)).is_ok());
     }
 
     #[test]
@@ -787,6 +838,10 @@ mod tests {
         assert!(!panel.mot());
         assert_eq!(host.next_byte(), None);
         host.poll_mot(panel.mot());
+        assert_eq!(host.next_byte(), None); // SÄN stays low for three polls (over 20 ms)
+        host.poll_mot(panel.mot());
+        assert_eq!(host.next_byte(), None);
+        host.poll_mot(panel.mot());
         assert_eq!(host.next_byte(), None); // idle, then the registers
         assert_eq!(host.next_byte(), Some(0));
         assert_eq!(host.stats().keys, 1);
@@ -795,7 +850,7 @@ mod tests {
     #[test]
     fn a_dead_panel_cannot_stop_the_displays() {
         let mut host: Host<7> = Host::new(HostConfig {
-            key_timeout_polls: 3,
+            key_timeout_polls: 6,
             mot_stuck_polls: 4,
         })
         .unwrap();
@@ -803,21 +858,34 @@ mod tests {
         host.poll_mot(true);
         assert_eq!(host.next_byte(), Some(RESET));
         assert_eq!(host.next_byte(), None);
-        for _ in 0..20 {
-            events.extend(host.poll_mot(true));
+        for _ in 0..10 {
+            events.extend(host.poll_mot(true)); // 6 polls of key time-out, 4 of MOT time-out
         }
         assert_eq!(events, vec![HostEvent::KeyTimedOut, HostEvent::MotStuck]);
-        // Still ignoring the stuck MOT until it drops once: whole sequences go out.
+        // The stuck MOT is ignored for `mot_stuck_polls` (4) polls: whole sequences go out.
         for _ in 0..3 {
             assert_eq!(host.poll_mot(true), None);
             assert_eq!(host.next_byte(), None); // idle after the reset byte
             assert!((0..7).all(|_| host.next_byte().is_some()));
             assert_eq!(host.next_byte(), Some(RESET));
+            assert!(!host.san());
         }
+        // The fourth poll: answered again (a panel holding a key is never ignored for good).
+        host.poll_mot(true);
+        assert_eq!(host.next_byte(), None);
+        assert!(host.san());
+        // Given up again, stuck again; this time MOT reads low once: answered at once.
+        events.clear();
+        for _ in 0..10 {
+            events.extend(host.poll_mot(true));
+        }
+        assert_eq!(events, vec![HostEvent::KeyTimedOut, HostEvent::MotStuck]);
         assert!(!host.san());
-        // MOT dropped once: the next boundary between sequences (here, now) takes the key.
         host.poll_mot(false);
         host.poll_mot(true);
+        assert_eq!(host.next_byte(), None); // the idle byte time after the reset byte
+        assert!((0..7).all(|_| host.next_byte().is_some()));
+        assert_eq!(host.next_byte(), Some(RESET));
         assert_eq!(host.next_byte(), None);
         assert!(host.san());
     }

@@ -87,6 +87,13 @@ struct Sim<const R: usize> {
     polls: usize,
     /// The host's transmitter was told to leave the line idle until then (µs).
     idle_until: u64,
+    /// The panel samples the SÄN wire only on its 20 ms tick (the slowest the handshake
+    /// allows), not at every step.
+    san_on_tick: bool,
+    /// When SÄN last rose (µs), while it is up.
+    san_since: Option<u64>,
+    /// The longest time from SÄN rising to the key delivered (µs).
+    longest_key_exchange: u64,
 }
 
 impl<const R: usize> Sim<R> {
@@ -104,6 +111,9 @@ impl<const R: usize> Sim<R> {
             mot_glitch: Vec::new(),
             polls: 0,
             idle_until: 0,
+            san_on_tick: false,
+            san_since: None,
+            longest_key_exchange: 0,
         }
     }
 
@@ -139,14 +149,25 @@ impl<const R: usize> Sim<R> {
             self.up.sent += 1;
             let frame = self.damage(frame, false, index);
             match self.host.receive(framing.decode(frame)) {
-                Some(HostEvent::Key(k)) => self.delivered.push(k),
+                Some(HostEvent::Key(k)) => {
+                    self.delivered.push(k);
+                    let since = self.san_since.unwrap();
+                    self.longest_key_exchange = self.longest_key_exchange.max(self.now - since);
+                }
                 Some(HostEvent::KeyTimedOut) => self.timeouts += 1,
                 _ => {}
             }
         }
-        // The SÄN wire, sampled by the panel every step.
-        if let Some(key) = self.panel.set_san(self.host.san()) {
-            self.up.queue.push_back(framing.encode(key));
+        self.san_since = match (self.host.san(), self.san_since) {
+            (true, None) => Some(self.now),
+            (true, since) => since,
+            (false, _) => None,
+        };
+        // The SÄN wire, sampled by the panel every step (or only on its tick, below).
+        if !self.san_on_tick {
+            if let Some(key) = self.panel.set_san(self.host.san()) {
+                self.up.queue.push_back(framing.encode(key));
+            }
         }
         if self.now.is_multiple_of(10_000) {
             let glitch = match self.mot_glitch.len() {
@@ -159,7 +180,13 @@ impl<const R: usize> Sim<R> {
             }
         }
         if self.now % 20_000 == self.tick_phase {
-            if let Some(key) = self.panel.tick_20ms() {
+            let sampled = if self.san_on_tick {
+                self.panel.set_san(self.host.san())
+            } else {
+                None
+            };
+            let repeat = self.panel.tick_20ms();
+            if let Some(key) = sampled.or(repeat) {
                 self.up.queue.push_back(framing.encode(key));
             }
         }
@@ -298,6 +325,157 @@ proptest! {
         prop_assert_eq!(sim.panel.keys_waiting(), 0);
         prop_assert_eq!(sim.delivered.len(), delivered + waiting);
     }
+}
+
+/// Makes a repeating glitch pattern one where no two consecutive polls lie (the last poll and
+/// the first count as consecutive: the pattern repeats).
+fn no_two_consecutive(mut glitch: Vec<bool>) -> Vec<bool> {
+    for i in 1..glitch.len() {
+        if glitch[i - 1] {
+            glitch[i] = false;
+        }
+    }
+    let n = glitch.len();
+    if n > 0 && glitch[0] && glitch[n - 1] {
+        glitch[n - 1] = false;
+    }
+    glitch
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(150))]
+
+    /// Issue 19 (attack, item 2): a MOT line that lies on any polls (any repeating pattern of
+    /// lies, and patterns in which no two consecutive polls lie), a panel that samples SÄN only
+    /// on its 20 ms tick (the slowest the handshake allows) or at once, 1, 2 or 7 registers: no
+    /// key is ever delivered twice, none is altered, they come in the order pressed.
+    #[test]
+    fn a_lying_mot_line_never_delivers_a_key_twice(
+        n in 1usize..6,
+        glitch in proptest::collection::vec(any::<bool>(), 1..40),
+        single in any::<bool>(),
+        phase in 0u64..200,
+        san_on_tick in any::<bool>(),
+        registers in 0usize..3,
+    ) {
+        let glitch = if single { no_two_consecutive(glitch) } else { glitch };
+        let keys: Vec<u8> = (0..n as u8).map(|k| 0x41 + k).collect();
+        let delivered = match registers {
+            0 => mot_lies::<1>(&keys, &glitch, phase, san_on_tick),
+            1 => mot_lies::<2>(&keys, &glitch, phase, san_on_tick),
+            _ => mot_lies::<7>(&keys, &glitch, phase, san_on_tick),
+        };
+        // Distinct keys pressed in increasing order: delivered must be strictly increasing.
+        prop_assert!(
+            delivered.windows(2).all(|w| w[0] < w[1]) && delivered.iter().all(|k| keys.contains(k)),
+            "pressed {:?}, delivered {:?}, MOT lies {:?}", keys, delivered, glitch
+        );
+    }
+}
+
+fn mot_lies<const R: usize>(
+    keys: &[u8],
+    glitch: &[bool],
+    phase: u64,
+    san_on_tick: bool,
+) -> Vec<u8> {
+    let mut sim: Sim<R> = Sim::new(Damage::None, phase * 100);
+    sim.mot_glitch = glitch.to_vec();
+    sim.san_on_tick = san_on_tick;
+    for &k in keys {
+        sim.panel.press(k).unwrap();
+    }
+    sim.run_ms(3_000);
+    sim.delivered
+}
+
+/// Issue 19 (attack, item 5): on a clean line, a panel that samples SÄN only on its 20 ms tick,
+/// at phases of that tick (700 µs apart over 20 ms) and of the host's sequences (100 µs apart
+/// over 10 ms) against the host's polls, with the smallest key
+/// time-out the host accepts: every key is delivered, none times out. And the second key byte
+/// does arrive more than 40 ms after SÄN rose at some phase, so 5 polls (the 5th may come 40 ms
+/// after the rise) would lose keys: 6 is the least that works.
+#[test]
+fn the_smallest_key_time_out_loses_no_key_on_a_clean_line() {
+    let config = HostConfig {
+        key_timeout_polls: regler_panel_link::panel::MIN_KEY_TIMEOUT_POLLS,
+        ..HostConfig::default()
+    };
+    assert_eq!(config.key_timeout_polls, 6);
+    let mut longest = 0;
+    for phase in (0..200).step_by(7) {
+        for offset in 0..100 {
+            let mut sim: Sim<7> = Sim::new(Damage::None, phase * 100);
+            sim.host = Host::new(config).unwrap();
+            sim.san_on_tick = true;
+            sim.idle_until = offset * STEP_US; // the host starts sending then
+            let keys = [0x10, 0x11];
+            for k in keys {
+                sim.panel.press(k).unwrap();
+            }
+            sim.run_ms(200);
+            let at = (phase * 100, offset * 100);
+            assert_eq!(sim.delivered, keys, "tick phase, host start (µs): {at:?}");
+            assert_eq!(sim.timeouts, 0);
+            longest = longest.max(sim.longest_key_exchange);
+        }
+    }
+    assert!(
+        (40_000..=40_000 + BYTE_US + 2 * STEP_US).contains(&longest),
+        "the second key byte came {longest} µs after SÄN rose"
+    );
+}
+
+/// The attacker's timed reproducer: one MOT poll reads low while the panel still holds MOT high,
+/// the panel samples SÄN on its 20 ms tick. The host used to leave the exchange on that one low
+/// poll, send a sequence (shorter than 20 ms for two registers) and raise SÄN again before the
+/// panel ever saw it low: the key was delivered twice.
+#[test]
+fn one_false_mot_low_poll_does_not_deliver_a_key_twice() {
+    let mut host: Host<2> = Host::new(HostConfig::default()).unwrap();
+    let mut panel: Panel<2> = Panel::new();
+    let mut keys = vec![];
+    panel.press(0x41).unwrap();
+    host.poll_mot(panel.mot()); // t = 0 ms: MOT high
+    assert_eq!(host.next_byte(), Some(RESET));
+    assert_eq!(host.next_byte(), None); // SÄN rises between sequences
+    assert!(host.san());
+    let k = panel.set_san(host.san()).unwrap(); // 20 ms tick: SÄN sampled high
+    keys.extend(host.receive(Ok(k)));
+    let _ = host.poll_mot(panel.mot()); // 30 ms
+    let k = panel.tick_20ms().unwrap(); // 40 ms: the repeat (SÄN sampled: still high)
+    keys.extend(host.receive(Ok(k)));
+    assert_eq!(keys, [HostEvent::Key(0x41)]);
+    assert!(!host.san()); // ≈ 42 ms: SÄN dropped
+    assert!(panel.mot());
+    host.poll_mot(false); // 50 ms: the MOT line lies low for one poll
+    for _ in 0..4 {
+        let _ = host.next_byte(); // 4 byte times: what a sequence of two registers takes
+    }
+    host.poll_mot(panel.mot()); // 60 ms: MOT (really high) seen
+    let _ = host.next_byte();
+    // 60 ms tick: the panel samples SÄN. With the bug it was high again (the panel never saw
+    // it low) and the key went out once more.
+    let _ = panel.set_san(host.san());
+    for poll in 0..20 {
+        if let Some(k) = panel.tick_20ms() {
+            keys.extend(host.receive(Ok(k)));
+        }
+        let _ = host.poll_mot(panel.mot());
+        for _ in 0..8 {
+            let _ = host.next_byte();
+        }
+        let _ = host.poll_mot(panel.mot());
+        if let Some(k) = panel.set_san(host.san()) {
+            keys.extend(host.receive(Ok(k)));
+        }
+        assert!(poll < 19 || panel.keys_waiting() == 0);
+    }
+    assert_eq!(
+        keys,
+        [HostEvent::Key(0x41)],
+        "one press of 0x41, the host delivered {keys:?}"
+    );
 }
 
 #[test]
@@ -634,11 +812,11 @@ fn every_short_periodic_mot_pattern_keeps_the_displays_refreshed() {
     for config in [
         HostConfig::default(),
         HostConfig {
-            key_timeout_polls: 1,
-            mot_stuck_polls: 1,
+            key_timeout_polls: 6,
+            mot_stuck_polls: 3,
         },
         HostConfig {
-            key_timeout_polls: 3,
+            key_timeout_polls: 7,
             mot_stuck_polls: 5,
         },
     ] {
@@ -666,8 +844,8 @@ proptest! {
     #[test]
     fn any_mot_pattern_keeps_the_displays_refreshed(
         runs in proptest::collection::vec((any::<bool>(), 1u64..150), 1..40),
-        key_timeout_polls in 1u16..30,
-        mot_stuck_polls in 1u16..150,
+        key_timeout_polls in 6u16..30,
+        mot_stuck_polls in 3u16..150,
     ) {
         let config = HostConfig { key_timeout_polls, mot_stuck_polls };
         let levels: Vec<bool> = runs.iter().flat_map(|&(l, n)| (0..n).map(move |_| l)).collect();
