@@ -25,30 +25,41 @@
 //! ones), the reset byte into a register value, or one register value into another. A flipped
 //! start bit, or a flipped idle bit read as a start bit, makes a bit receiver lose character
 //! sync: it reads frames that are not the host's until it finds the start bits again, and a
-//! second flip can make such a frame pass the parity. Then:
-//! - After **any 1- or 2-bit error anywhere in the stream** (in one frame, or one bit in each of
-//!   two), **no register ever shows a value the host did not send for that register** (in this
-//!   or an earlier sequence; before the first sequence, 0): never a shifted display. The one
-//!   exception the link cannot see: a register whose own frame took both flips (for the first
-//!   register, its frame and the idle byte time before it) may show a wrong 7-bit value until
-//!   the next clean sequence (the source has no checksum to catch it).
-//! - **Every register shows the host's value at most two sequences after the damage**: once
-//!   the receiver has read a reset byte in sync again — the idle byte time after every reset
-//!   byte lets a receiver that lost sync find the start bits again, whatever the data — the
-//!   sequence after it is shown whole. A damaged reset byte or a register byte read as a reset
-//!   byte costs at most the sequences on both sides of it: the display is one or two sequences
-//!   older, never wrong.
+//! second flip can make such a frame pass the parity — or make a fake reset byte: a receiver
+//! thrown out of sync can take the closing reset byte's parity bit (0) for a start bit and read
+//! its stop bit and the idle ones as `0xFF`; a flipped idle bit makes that frame clean. What is
+//! guaranteed, at the level it is tested:
+//! - **Frames read in sync** (what a UART gives while it keeps character sync, e.g. one or two
+//!   flips among the data and parity bits): after any 1- or 2-bit error, **no register ever
+//!   shows a value the host did not send for that register** (in this or an earlier sequence;
+//!   before the first sequence, 0): never a shifted display. The one exception the link cannot
+//!   see: a register whose own frame took both flips may show a wrong 7-bit value until the
+//!   next clean sequence (the link has no checksum).
+//! - **At bit level, through a bit receiver** ([`crate::line::BitReceiver`]), start, stop and
+//!   idle bits included: after any **1-bit** error no register shows a value the host did not
+//!   send for it; after any **1- or 2-bit** error **every register shows the host's value again
+//!   within two sequences**: once the reset byte closing the second sequence after the one the
+//!   damage fell in has arrived. Until then a 2-bit error that throws the receiver out of
+//!   character sync can show wrong 7-bit values (rare: measured with random values, biased to
+//!   many ones, at about 2·10⁻⁵ of bit pairs with 7 registers and 7·10⁻⁵ with 1 register).
 //!
-//! Tested for every value 0–127 at every position of 7, 29 and 46 registers and every 1- and
-//! 2-bit change of its frame and of the reset bytes on both sides (frames read in sync), and at
-//! bit level, through a bit receiver ([`crate::line::BitReceiver`]), for every pair of bits
-//! flipped anywhere from the reset byte before a sequence to the reset byte after it — start,
-//! stop and idle bits included — with eight sets of values chosen to be hard (runs of `0x7F`,
-//! `0x7E`, 0, single bits, alternating bits). Without the idle byte time a receiver out of sync
-//! could read every frame as a framing error for as long as the data repeated (a display stale
-//! for good); without dropping a sequence on a damaged byte, frames read out of sync that passed
-//! the parity could be shown. The price: one byte time per sequence (`R + 2` byte times), and
+//! Recovery is bounded because the idle byte time after every reset byte lets a receiver that
+//! lost sync find the start bits again, whatever the data, and a damaged byte drops its
+//! sequence. Without the idle byte time a receiver out of sync could read every frame as a
+//! framing error for as long as the data repeated (one flipped start bit could leave a display
+//! stale for good); without dropping a sequence on a damaged byte, frames read out of sync that
+//! passed the parity could be shown. The idle time also creates the fake-reset pattern above; a
+//! display that recovers within two sequences from every 1- and 2-bit error was chosen over one
+//! that can freeze on one flip. The price: one byte time per sequence (`R + 2` byte times), and
 //! under noise a damaged byte costs its whole sequence, not one register, for one sequence.
+//!
+//! Tested, frame level: every value 0–127 at every position of 7, 29 and 46 registers and every
+//! 1- and 2-bit change of its frame and of the reset bytes on both sides, and one bit in each of
+//! two frames. Bit level: every single bit and every pair of bits from the reset byte opening a
+//! sequence through the idle byte time after the reset byte closing the next one (two whole
+//! sequences and the idle byte times on both sides), with eight sets of values chosen to be
+//! hard (runs of `0x7F`, `0x7E`, 0, single bits, alternating bits) and with random values, new
+//! every sequence, for 1, 2 and 7 registers.
 //!
 //! # The key handshake
 //! - The panel has a key: it raises **MOT**.
@@ -60,11 +71,18 @@
 //!   ([`Panel::tick_20ms`]).
 //! - Two **consecutive identical** clean bytes are the key ([`HostEvent::Key`]); the host drops
 //!   SÄN. A damaged byte in between starts the pair again, so a key is never altered by one
-//!   damaged byte and, because the host ignores the line until MOT has dropped, never delivered
-//!   twice.
-//! - SÄN dropped: the panel drops MOT (for two of its 20 ms ticks, so the host sees it) and
-//!   forgets the key; the host waits for MOT low and goes on with the registers (the reset byte
-//!   went out before the exchange), and sends a whole sequence before it answers MOT again.
+//!   damaged byte.
+//! - SÄN dropped: the panel drops MOT (for two of its 20 ms ticks) and forgets the key; the host
+//!   keeps SÄN low until MOT has read low on a poll since SÄN fell **and** three polls have
+//!   passed (or until [`HostConfig::mot_stuck_polls`]), goes on with the registers (the reset
+//!   byte went out before the exchange), and sends a whole sequence before it answers MOT
+//!   again. The third poll comes more than 20 ms after SÄN fell, so **a panel that samples SÄN
+//!   at least every 20 ms sees every key taken before SÄN rises again: no key is ever
+//!   delivered twice, whatever the MOT line does** (a MOT line that lies on single polls, or on
+//!   many). (Leaving on one poll that read MOT low let a chattering MOT line deliver a key twice.)
+//! - The panel must sample SÄN at least every 20 ms (and send the key byte when it sees SÄN
+//!   rise, and again every 20 ms while it is up); [`MIN_KEY_TIMEOUT_POLLS`] (6) is what that
+//!   takes: the second key byte arrives up to 42.3 ms after SÄN rose.
 //!
 //! A key waits at most one sequence (`R + 2` byte times) plus a poll and a byte time before
 //! SÄN rises.
@@ -72,7 +90,8 @@
 //! Beyond the source: the host gives up on a key after [`HostConfig::key_timeout_polls`] polls
 //! ([`HostEvent::KeyTimedOut`]) and on a MOT line that never drops after
 //! [`HostConfig::mot_stuck_polls`] ([`HostEvent::MotStuck`]: it goes back to refreshing and
-//! ignores MOT until it has seen it low). So **whatever the MOT line does** (stuck high, stuck
+//! ignores MOT for `mot_stuck_polls` polls more, or until it reads low; a panel holding a key is
+//! never ignored for good). So **whatever the MOT line does** (stuck high, stuck
 //! low, toggling at every poll, glitching), when the transmitter asks [`Host::next_byte`] once
 //! per byte time and MOT is polled every 10 ms, on a clean line **the panel shows a new sequence
 //! at least every `R + 3` byte times plus `key_timeout_polls + mot_stuck_polls` polls** (the

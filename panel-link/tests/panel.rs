@@ -856,36 +856,53 @@ proptest! {
 
 /// The register stream as bits on the line, frames back to back as a UART sends them when it is
 /// fed whenever it is ready — with the idle byte time the host leaves after every reset byte —
-/// through a bit receiver (which loses character sync when a start bit
-/// is hit): every single bit and every pair of bits flipped anywhere in the frames from the
-/// reset byte before a sequence to the reset byte after it, start, stop and idle bits included.
-/// After every byte, every register shows a value the host sent for it, or — only for the
-/// register whose own frame (or the line bit just before it) took the flips — some 7-bit value;
-/// and in every
-/// case the display is right once the sequence after the next reset byte read in sync is through,
-/// which must happen within the sequence after the flips. Returns the number of cases.
-fn every_bit_pair_on_the_line<const R: usize>(a: &[u8; R], b: &[u8; R]) -> u64 {
+/// through a bit receiver (which loses character sync when a start bit is hit). The host's
+/// registers are set to `values[k]` before sequence `k` goes out (its reset byte opens it; its
+/// idle byte time and registers follow). Every single bit and every pair of bits is flipped in
+/// the window from the reset byte opening sequence 2 through the idle byte time after the reset
+/// byte closing sequence 3 (two whole sequences and the idle byte times on both sides; start,
+/// stop and idle bits included). Checks the guarantee as the module docs state it at bit level:
+/// - after a **1-bit** error, no register ever shows a value the host did not send for it (in
+///   a sequence that has begun, or 0 before the first);
+/// - after a 1- or 2-bit error, once the reset byte closing the second sequence after the one
+///   the (last) flip fell in has arrived, every register shows the host's value of that second
+///   sequence — and the next sequence's one reset byte later.
+///
+/// Returns (cases, pairs that showed a value never sent before recovery).
+fn every_bit_pair_on_the_line<const R: usize>(values: &[[u8; R]]) -> (u64, u64) {
+    assert!(values.len() >= 9, "the stream needs nine sequences");
     let framing = Framing::PANEL;
-    let slot_len = R + 2; // the reset byte, the idle byte time, R registers
-    let slots = slots::<R>(a, b, 14 * (R + 1));
-    let mut bits: Vec<bool> = vec![true; 3];
-    for slot in &slots {
+    let mut host: Host<R> = Host::new(HostConfig::default()).unwrap();
+    // Byte time by byte time: the slot, and the sequence it belongs to.
+    let mut slots: Vec<(Option<u8>, usize)> = Vec::new();
+    let mut seq = 0usize;
+    while slots.len() < 9 * (R + 2) {
+        if slots.len() % (R + 2) == 0 {
+            seq = slots.len() / (R + 2);
+            for (i, &v) in values[seq].iter().enumerate() {
+                host.set(i, v).unwrap();
+            }
+        }
+        slots.push((host.next_byte(), seq));
+    }
+    for (n, (slot, _)) in slots.iter().enumerate() {
+        match n % (R + 2) {
+            0 => assert_eq!(*slot, Some(RESET), "the stream's layout"),
+            1 => assert_eq!(*slot, None, "the stream's layout"),
+            _ => assert!(slot.is_some_and(|v| v <= MAX_VALUE), "the stream's layout"),
+        }
+    }
+    let mut bits: Vec<bool> = vec![true; 3]; // the line idle before the host starts
+    let mut seq_of_bit: Vec<usize> = vec![0; 3];
+    for &(slot, seq) in &slots {
         let frame = slot.map_or(0x7FF, |byte| framing.encode(byte)); // idle: all ones
         bits.extend((0..11).map(|k| frame >> k & 1 == 1));
+        seq_of_bit.extend([seq; 11]);
     }
-    // The slot a bit index ends, when it ends one: (slot, what the host put there).
-    let slot_at = |k: usize| -> Option<(usize, Option<u8>)> {
-        let n = (k + 1).checked_sub(3)?;
-        if n == 0 || !n.is_multiple_of(11) {
-            return None;
-        }
-        let s = n / 11 - 1;
-        Some((s, *slots.get(s)?))
-    };
-    // The window: the reset byte that opens sequence `b` (slot `slot_len`), its idle byte time
-    // and registers, through the reset byte that closes it (slot `2 * slot_len`).
-    let first = 3 + 11 * slot_len;
-    let window = first..first + 11 * (slot_len + 1);
+    // One past the last bit of the reset byte opening sequence k.
+    let reset_end = |k: usize| 3 + 11 * (k * (R + 2) + 1);
+    let first = reset_end(2) - 11;
+    let window = first..reset_end(4) + 11;
     let mut rx0 = BitReceiver::new(framing);
     let mut panel0: Panel<R> = Panel::new();
     for &bit in &bits[..first] {
@@ -893,62 +910,47 @@ fn every_bit_pair_on_the_line<const R: usize>(a: &[u8; R], b: &[u8; R]) -> u64 {
             panel0.receive(got);
         }
     }
-    let end = first + 11 * (10 * slot_len + 1);
-    let mut cases = 0;
+    let (mut cases, mut wrong_pairs) = (0, 0);
     for i in window.clone() {
         for j in i..window.end {
             cases += 1;
             let (mut rx, mut panel) = (rx0, panel0.clone());
-            let mut allow = allowed(a, b);
-            // The register whose own frame took both flips may show a wrong 7-bit value: two
-            // flips that pass the parity cannot be told from a good frame. For the first
-            // register, the idle byte time before it counts as its own: a flip there is a
-            // false start bit, and a second flip can make the frame read from it pass.
-            for (s, slot) in slots.iter().enumerate() {
-                let start = 3 + 11 * s;
-                let own = if s % slot_len == 2 { start - 11 } else { start }..start + 11;
-                if slot.is_some_and(|v| v != RESET) && own.contains(&i) && own.contains(&j) {
-                    allow[s % slot_len - 2] = u128::MAX;
-                }
-            }
+            let damaged = seq_of_bit[j];
+            let (check, last_check) = (reset_end(damaged + 3), reset_end(damaged + 4));
             let mut last = *panel.registers();
-            let mut right_by = None;
-            for (k, &bit) in bits[first..end].iter().enumerate() {
-                let k = k + first;
-                let Some(got) = rx.bit(bit ^ (k == i || k == j)) else {
-                    continue;
-                };
-                if let (Ok(w), Some((_, host_byte))) = (got, slot_at(k)) {
-                    if w == RESET && host_byte == Some(RESET) && k > j && right_by.is_none() {
-                        right_by = Some(k + 11 * slot_len);
-                    }
+            let mut wrong = false;
+            for (k, &bit) in bits.iter().enumerate().take(last_check).skip(first) {
+                if let Some(got) = rx.bit(bit ^ (k == i || k == j)) {
+                    panel.receive(got);
                 }
-                panel.receive(got);
                 if panel.registers() != &last {
                     last = *panel.registers();
-                    assert_allowed(&last, &allow, &|| {
-                        format!("bits {i} and {j} flipped, slots {slots:?}")
-                    });
+                    let begun = seq_of_bit[k];
+                    for (r, &v) in last.iter().enumerate() {
+                        if v != 0 && values[..=begun].iter().all(|s| s[r] != v) {
+                            assert!(
+                                i != j,
+                                "R {R}: one bit ({i}) flipped, register {r} shows {v}, which \
+                                 the host never sent for it; values {values:?}"
+                            );
+                            wrong = true;
+                        }
+                    }
                 }
-                if right_by == Some(k) {
+                if k + 1 == check || k + 1 == last_check {
+                    let shown = if k + 1 == check { damaged + 2 } else { damaged + 3 };
                     assert_eq!(
                         panel.registers(),
-                        b,
-                        "bits {i} and {j} flipped: not right after the first sequence in sync"
+                        &values[shown],
+                        "R {R}: bits {i} and {j} flipped (sequence {damaged}): not right at the \
+                         reset byte closing sequence {shown}; values {values:?}"
                     );
                 }
             }
-            // Back in sync within the sequence after the flips (an idle byte time follows
-            // every reset byte), and right one sequence later.
-            let bound = window.end + 11 * slot_len;
-            assert!(
-                right_by.is_some_and(|k| k <= bound + 11 * slot_len),
-                "bits {i} and {j} flipped: the receiver did not read a reset byte in sync \
-                 within a sequence ({right_by:?}), slots {slots:?}"
-            );
+            wrong_pairs += u64::from(wrong);
         }
     }
-    cases
+    (cases, wrong_pairs)
 }
 
 #[test]
@@ -972,9 +974,121 @@ fn every_1_and_2_bit_error_on_the_line() {
             [0x55, 0x2A, 0x55, 0x2A, 0x55, 0x2A, 0x55],
         ),
     ] {
-        cases += every_bit_pair_on_the_line::<7>(&a, &b);
+        // `a` for the first two sequences, `b` from the window on (constant data: the case in
+        // which a receiver out of sync stayed out of sync before the idle byte time).
+        let values: Vec<[u8; 7]> = (0..9).map(|k| if k < 2 { a } else { b }).collect();
+        cases += every_bit_pair_on_the_line::<7>(&values).0;
     }
-    assert!(cases > 8 * 4_000);
+    assert!(cases > 8 * 24_000);
+}
+
+/// The attacker's reproducer (issue 19, panel attack item 1): the start bit of the last
+/// register and bit 7 of the idle byte time after the reset byte closing the sequence. The
+/// receiver, out of sync, reads a frame that passes the parity, then the reset byte's parity
+/// bit as a start bit and 0xFF from the stop bit and the idle ones; the flipped idle bit makes
+/// that a clean frame: a fake reset byte, and a wrong value is shown. That is the 2-bit case
+/// the guarantee leaves open; it must be right two sequences later.
+#[test]
+fn two_flips_out_of_sync_are_right_within_two_sequences() {
+    let values = [0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x73];
+    let framing = Framing::PANEL;
+    let mut host: Host<7> = Host::new(HostConfig::default()).unwrap();
+    for (i, v) in values.iter().enumerate() {
+        host.set(i, *v).unwrap();
+    }
+    let mut rx = BitReceiver::new(framing);
+    let mut panel: Panel<7> = Panel::new();
+    let (mut resets, mut registers, mut idle_times) = (0, 0, 0);
+    let (mut wrong, mut right_again) = (None, None);
+    for _ in 0..80 {
+        let b = host.next_byte();
+        let mut frame = b.map_or(0x7FF, |b| framing.encode(b));
+        match b {
+            Some(RESET) => {
+                resets += 1;
+                registers = 0;
+            }
+            Some(_) => {
+                registers += 1;
+                if resets == 3 && registers == 7 {
+                    frame |= 1; // the start bit of register 7 of sequence 3
+                }
+            }
+            None => {
+                idle_times += 1;
+                if idle_times == 4 {
+                    frame &= !(1 << 7); // bit 7 of the idle byte time closing sequence 3
+                }
+            }
+        }
+        for k in 0..11 {
+            if let Some(byte) = rx.bit(frame >> k & 1 == 1) {
+                panel.receive(byte);
+                if *panel.registers() != [0; 7] && *panel.registers() != values {
+                    wrong.get_or_insert(*panel.registers());
+                }
+                if byte == Ok(RESET) && resets == 6 && right_again.is_none() {
+                    right_again = Some(*panel.registers());
+                }
+            }
+        }
+    }
+    assert!(wrong.is_some(), "the attacker's case shows a wrong value (documented)");
+    assert_eq!(right_again, Some(values), "right at the reset byte closing sequence 5");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(6))]
+
+    /// The same guarantee with random register values, new ones every sequence, for 1, 2 and 7
+    /// registers: every single bit and bit pair over two sequences and the idle byte times on
+    /// both sides.
+    #[test]
+    fn every_bit_pair_on_the_line_random_values(
+        one in proptest::collection::vec(0u8..=127, 9),
+        two in proptest::collection::vec(proptest::array::uniform2(0u8..=127), 9),
+        seven in proptest::collection::vec(proptest::array::uniform7(0u8..=127), 9),
+    ) {
+        let one: Vec<[u8; 1]> = one.into_iter().map(|v| [v]).collect();
+        every_bit_pair_on_the_line::<1>(&one);
+        every_bit_pair_on_the_line::<2>(&two);
+        every_bit_pair_on_the_line::<7>(&seven);
+    }
+}
+
+/// How often a 2-bit error through a bit receiver shows a value the host never sent, with
+/// random values (biased to many ones: 0x7F, 0x7E-like values make fake reset bytes likely):
+/// a measurement, printed; it asserts only the guarantee. `cargo test --release -- --ignored
+/// --nocapture measure`.
+#[test]
+#[ignore = "a measurement (minutes in debug)"]
+fn measure_wrong_values_after_two_flips() {
+    let mut seed = 1u64;
+    let mut next = move || {
+        seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        (seed >> 33) as u8
+    };
+    let mut value = move || match next() % 4 {
+        0 => 0x7F ^ (1 << (next() % 7)),
+        1 => 0x7F,
+        _ => next() & 0x7F,
+    };
+    let (mut cases, mut wrong) = (0, 0);
+    for _ in 0..40 {
+        let values: Vec<[u8; 7]> = (0..9).map(|_| core::array::from_fn(|_| value())).collect();
+        let (c, w) = every_bit_pair_on_the_line::<7>(&values);
+        cases += c;
+        wrong += w;
+    }
+    println!("R = 7: {wrong} of {cases} bit pairs showed a value never sent");
+    let (mut cases, mut wrong) = (0, 0);
+    for _ in 0..400 {
+        let values: Vec<[u8; 1]> = (0..9).map(|_| [value()]).collect();
+        let (c, w) = every_bit_pair_on_the_line::<1>(&values);
+        cases += c;
+        wrong += w;
+    }
+    println!("R = 1: {wrong} of {cases} bit pairs showed a value never sent");
 }
 
 proptest! {
