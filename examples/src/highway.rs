@@ -874,7 +874,9 @@ pub mod ports {
         panel_port: &str,
         keys: &[u8],
     ) -> Result<PanelSummary, String> {
-        use regler_panel_link::io::{Transmit, host_transmit, panel_receive, read_byte, write_byte};
+        use regler_panel_link::io::{
+            Transmit, host_transmit, panel_receive, read_byte, write_byte,
+        };
         use regler_panel_link::panel::{Host, HostConfig, HostEvent, LANE_PANEL, Panel};
 
         let mut host_side = open(host_port, Duration::from_millis(1))?;

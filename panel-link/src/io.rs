@@ -489,7 +489,18 @@ mod tests {
         }
         assert_eq!(
             written,
-            [Some(RESET), None, Some(0), Some(0), Some(0), Some(RESET), None, Some(0), Some(0), Some(0)]
+            [
+                Some(RESET),
+                None,
+                Some(0),
+                Some(0),
+                Some(0),
+                Some(RESET),
+                None,
+                Some(0),
+                Some(0),
+                Some(0)
+            ]
         );
     }
 }

@@ -877,7 +877,7 @@ fn every_bit_pair_on_the_line<const R: usize>(values: &[[u8; R]]) -> (u64, u64) 
     let mut slots: Vec<(Option<u8>, usize)> = Vec::new();
     let mut seq = 0usize;
     while slots.len() < 9 * (R + 2) {
-        if slots.len() % (R + 2) == 0 {
+        if slots.len().is_multiple_of(R + 2) {
             seq = slots.len() / (R + 2);
             for (i, &v) in values[seq].iter().enumerate() {
                 host.set(i, v).unwrap();
@@ -938,7 +938,11 @@ fn every_bit_pair_on_the_line<const R: usize>(values: &[[u8; R]]) -> (u64, u64) 
                     }
                 }
                 if k + 1 == check || k + 1 == last_check {
-                    let shown = if k + 1 == check { damaged + 2 } else { damaged + 3 };
+                    let shown = if k + 1 == check {
+                        damaged + 2
+                    } else {
+                        damaged + 3
+                    };
                     assert_eq!(
                         panel.registers(),
                         &values[shown],
@@ -1033,8 +1037,15 @@ fn two_flips_out_of_sync_are_right_within_two_sequences() {
             }
         }
     }
-    assert!(wrong.is_some(), "the attacker's case shows a wrong value (documented)");
-    assert_eq!(right_again, Some(values), "right at the reset byte closing sequence 5");
+    assert!(
+        wrong.is_some(),
+        "the attacker's case shows a wrong value (documented)"
+    );
+    assert_eq!(
+        right_again,
+        Some(values),
+        "right at the reset byte closing sequence 5"
+    );
 }
 
 proptest! {
@@ -1065,7 +1076,9 @@ proptest! {
 fn measure_wrong_values_after_two_flips() {
     let mut seed = 1u64;
     let mut next = move || {
-        seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
         (seed >> 33) as u8
     };
     let mut value = move || match next() % 4 {
