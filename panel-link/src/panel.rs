@@ -40,8 +40,9 @@
 //!   send for it; after any **1- or 2-bit** error **every register shows the host's value again
 //!   within two sequences**: once the reset byte closing the second sequence after the one the
 //!   damage fell in has arrived. Until then a 2-bit error that throws the receiver out of
-//!   character sync can show wrong 7-bit values (rare: measured with random values, biased to
-//!   many ones, at about 2·10⁻⁵ of bit pairs with 7 registers and 7·10⁻⁵ with 1 register).
+//!   character sync can show wrong 7-bit values (rare: beyond the register whose own frame took
+//!   both flips, 16 of 972 400 bit pairs with 7 registers, 160 of 1 566 400 with 1 register,
+//!   random values biased to many ones — the test `measure_wrong_values_after_two_flips`).
 //!
 //! Recovery is bounded because the idle byte time after every reset byte lets a receiver that
 //! lost sync find the start bits again, whatever the data, and a damaged byte drops its
