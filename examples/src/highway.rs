@@ -879,7 +879,9 @@ pub mod ports {
         panel_port: &str,
         keys: &[u8],
     ) -> Result<PanelSummary, String> {
-        use regler_panel_link::io::{host_transmit, panel_receive, read_byte, write_byte};
+        use regler_panel_link::io::{
+            Transmit, host_transmit, panel_receive, read_byte, write_byte,
+        };
         use regler_panel_link::panel::{Host, HostConfig, HostEvent, LANE_PANEL, Panel};
 
         let mut host_side = open(host_port, Duration::from_millis(1))?;
@@ -897,7 +899,9 @@ pub mod ports {
             let mut next_tick = Duration::from_millis(20);
             while !panel_stop.load(Ordering::Relaxed) {
                 match panel_receive(&mut panel_side, &mut panel) {
-                    Ok(()) | Err(IoError::Port(_)) => {} // a time-out: a quiet line
+                    // A time-out: a quiet line (the panel is not told); another port error:
+                    // the panel was told its byte slot was damaged.
+                    Ok(()) | Err(IoError::Port(_)) => {}
                     Err(e) => return Err(format!("panel port: {e}")),
                 }
                 let now = start.elapsed();
@@ -940,8 +944,11 @@ pub mod ports {
                 }
             }
             if now >= next_byte {
+                // Once per byte time, whatever it returns: after `LeaveIdle` the line stays
+                // idle until the next byte time.
                 next_byte += byte_time;
-                host_transmit(&mut host_side, &mut host).map_err(|e| format!("host port: {e}"))?;
+                let _sent_or_idle: Transmit = host_transmit(&mut host_side, &mut host)
+                    .map_err(|e| format!("host port: {e}"))?;
             }
             if now >= next_poll {
                 next_poll += Duration::from_millis(10);

@@ -51,6 +51,7 @@ use core::fmt;
 use embedded_io::{Read, Write};
 
 use crate::highway::{Controller, Dataway, Driver, DriverEvent, WAIT};
+use crate::line::LineError;
 use crate::panel::{Host, Panel};
 
 /// What went wrong on the port.
@@ -263,22 +264,48 @@ pub fn clock_driver<P: Read + Write, const W: usize>(
     Ok(event)
 }
 
-/// The host's transmitter is ready: writes the next sequence byte, if the host is sending.
-/// Returns whether a byte was written.
+/// What [`host_transmit`] did with this byte time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[must_use = "on `LeaveIdle` the line must stay idle for one byte time before the next call"]
+pub enum Transmit {
+    /// A byte was written: it takes the line for one byte time.
+    Sent,
+    /// Nothing was written (the idle byte time after a reset byte, or no sequence under way):
+    /// **the caller must leave the line idle for one byte time** (11 bit times: 2.3 ms at 4 800
+    /// baud) before it calls [`host_transmit`] again. Without that wait the idle byte time that
+    /// lets a receiver that lost character sync find the start bits again does not exist.
+    LeaveIdle,
+}
+
+/// One byte time of the host's transmitter: writes the next sequence byte, if the host is
+/// sending.
+///
+/// Call it **once per byte time**, whatever it returns (a timer at the byte rate, or the UART's
+/// transmit-ready with a one-byte-time wait after [`Transmit::LeaveIdle`]). A blocking UART
+/// write returns as soon as the byte is in the transmitter, so a loop that calls this again at
+/// once after `LeaveIdle` sends the next byte with no idle line in between. This function cannot
+/// wait itself: `embedded-io` has no clock; the wait is the caller's (a HAL delay, a timer).
 ///
 /// # Errors
 /// See [`write_byte`].
 pub fn host_transmit<P: Write, const R: usize>(
     port: &mut P,
     host: &mut Host<R>,
-) -> Result<bool, IoError<P::Error>> {
+) -> Result<Transmit, IoError<P::Error>> {
     match host.next_byte() {
-        Some(byte) => write_byte(port, byte).map(|()| true),
-        None => Ok(false),
+        Some(byte) => write_byte(port, byte).map(|()| Transmit::Sent),
+        None => Ok(Transmit::LeaveIdle),
     }
 }
 
 /// Reads one byte into the panel.
+///
+/// A port error other than a time-out (a UART's framing, parity or overrun error, a broken
+/// port) means the byte slot was damaged: the panel is told so, as
+/// [`LineError::Framing`] (it drops the sequence the slot falls in, as for a damaged byte on
+/// the line), and the error is returned too. A time-out
+/// ([`embedded_io::ErrorKind::TimedOut`]) means no byte arrived (a quiet line, the idle byte
+/// time): the panel is not told. [`IoError::Closed`] leaves the panel alone as well.
 ///
 /// # Errors
 /// See [`read_byte`].
@@ -286,9 +313,20 @@ pub fn panel_receive<P: Read, const R: usize>(
     port: &mut P,
     panel: &mut Panel<R>,
 ) -> Result<(), IoError<P::Error>> {
-    let byte = read_byte(port)?;
-    panel.receive(Ok(byte));
-    Ok(())
+    match read_byte(port) {
+        Ok(byte) => {
+            panel.receive(Ok(byte));
+            Ok(())
+        }
+        Err(IoError::Port(e)) => {
+            use embedded_io::{Error as _, ErrorKind};
+            if e.kind() != ErrorKind::TimedOut {
+                panel.receive(Err(LineError::Framing));
+            }
+            Err(IoError::Port(e))
+        }
+        Err(e) => Err(e),
+    }
 }
 
 #[cfg(test)]
@@ -427,5 +465,134 @@ mod tests {
                 "write failing at clock {fail_from}, completion at {done_at}"
             );
         }
+    }
+
+    /// A port that hands out a fixed script of reads: a byte, an error of some kind, or the end.
+    struct Script(std::vec::Vec<Result<u8, embedded_io::ErrorKind>>);
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    struct Kind(embedded_io::ErrorKind);
+    impl embedded_io::Error for Kind {
+        fn kind(&self) -> embedded_io::ErrorKind {
+            self.0
+        }
+    }
+    impl fmt::Display for Kind {
+        fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            write!(f, "{:?}", self.0)
+        }
+    }
+    impl core::error::Error for Kind {}
+    impl embedded_io::ErrorType for Script {
+        type Error = Kind;
+    }
+    impl Read for Script {
+        fn read(&mut self, buf: &mut [u8]) -> Result<usize, Kind> {
+            if self.0.is_empty() {
+                return Ok(0);
+            }
+            match (self.0.remove(0), buf.first_mut()) {
+                (Ok(b), Some(slot)) => {
+                    *slot = b;
+                    Ok(1)
+                }
+                (Ok(_), None) => Ok(0),
+                (Err(kind), _) => Err(Kind(kind)),
+            }
+        }
+    }
+    impl Write for Script {
+        fn write(&mut self, buf: &[u8]) -> Result<usize, Kind> {
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> Result<(), Kind> {
+            Ok(())
+        }
+    }
+
+    /// Attack item 3: a read error (a UART's framing, parity or overrun error) in a sequence
+    /// drops that sequence, as a damaged byte on the line does; a time-out is a quiet line and
+    /// drops nothing. Both are returned to the caller.
+    #[test]
+    fn a_port_read_error_is_a_damaged_byte_for_the_panel() {
+        use crate::panel::RESET;
+        use embedded_io::ErrorKind;
+        for (kind, dropped) in [
+            (ErrorKind::Other, true),
+            (ErrorKind::InvalidData, true),
+            (ErrorKind::TimedOut, false),
+        ] {
+            // Reset, 1, 2, <error where 3 was>, ... the slot of register 3 went bad: with the
+            // error read as damage the sequence 1 2 x 4 is dropped. A time-out takes no slot:
+            // 1 2 4 5 is shown.
+            let mut port = Script(std::vec![
+                Ok(RESET),
+                Ok(1),
+                Ok(2),
+                Err(kind),
+                Ok(4),
+                Ok(5),
+                Ok(RESET),
+            ]);
+            let mut panel: Panel<4> = Panel::new();
+            let mut errors = 0;
+            for _ in 0..7 {
+                if let Err(e) = panel_receive(&mut port, &mut panel) {
+                    assert_eq!(e, IoError::Port(Kind(kind)));
+                    errors += 1;
+                }
+            }
+            assert_eq!(errors, 1);
+            if dropped {
+                assert_eq!(panel.registers(), &[0; 4], "{kind:?}");
+                assert_eq!(panel.stats().bad_bytes, 1);
+            } else {
+                assert_eq!(panel.registers(), &[1, 2, 4, 5], "{kind:?}");
+            }
+            assert_eq!(panel_receive(&mut port, &mut panel), Err(IoError::Closed));
+        }
+    }
+
+    /// Attack item 4: `host_transmit` says `LeaveIdle` exactly where the host leaves the line
+    /// idle (once per sequence, after the reset byte) and writes nothing then.
+    #[test]
+    fn host_transmit_says_when_to_leave_the_line_idle() {
+        use crate::panel::{HostConfig, RESET};
+        let mut host: Host<3> = Host::new(HostConfig::default()).unwrap();
+        let mut written = std::vec::Vec::new();
+        struct Tx<'a>(&'a mut std::vec::Vec<Option<u8>>);
+        impl embedded_io::ErrorType for Tx<'_> {
+            type Error = core::convert::Infallible;
+        }
+        impl Write for Tx<'_> {
+            fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+                self.0.extend(buf.iter().map(|&b| Some(b)));
+                Ok(buf.len())
+            }
+            fn flush(&mut self) -> Result<(), Self::Error> {
+                Ok(())
+            }
+        }
+        for _ in 0..10 {
+            match host_transmit(&mut Tx(&mut written), &mut host) {
+                Ok(Transmit::Sent) => {}
+                Ok(Transmit::LeaveIdle) => written.push(None),
+                Err(e) => panic!("{e:?}"),
+            }
+        }
+        assert_eq!(
+            written,
+            [
+                Some(RESET),
+                None,
+                Some(0),
+                Some(0),
+                Some(0),
+                Some(RESET),
+                None,
+                Some(0),
+                Some(0),
+                Some(0)
+            ]
+        );
     }
 }

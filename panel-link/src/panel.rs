@@ -25,30 +25,42 @@
 //! ones), the reset byte into a register value, or one register value into another. A flipped
 //! start bit, or a flipped idle bit read as a start bit, makes a bit receiver lose character
 //! sync: it reads frames that are not the host's until it finds the start bits again, and a
-//! second flip can make such a frame pass the parity. Then:
-//! - After **any 1- or 2-bit error anywhere in the stream** (in one frame, or one bit in each of
-//!   two), **no register ever shows a value the host did not send for that register** (in this
-//!   or an earlier sequence; before the first sequence, 0): never a shifted display. The one
-//!   exception the link cannot see: a register whose own frame took both flips (for the first
-//!   register, its frame and the idle byte time before it) may show a wrong 7-bit value until
-//!   the next clean sequence (the source has no checksum to catch it).
-//! - **Every register shows the host's value at most two sequences after the damage**: once
-//!   the receiver has read a reset byte in sync again — the idle byte time after every reset
-//!   byte lets a receiver that lost sync find the start bits again, whatever the data — the
-//!   sequence after it is shown whole. A damaged reset byte or a register byte read as a reset
-//!   byte costs at most the sequences on both sides of it: the display is one or two sequences
-//!   older, never wrong.
+//! second flip can make such a frame pass the parity — or make a fake reset byte: a receiver
+//! thrown out of sync can take the closing reset byte's parity bit (0) for a start bit and read
+//! its stop bit and the idle ones as `0xFF`; a flipped idle bit makes that frame clean. What is
+//! guaranteed, at the level it is tested:
+//! - **Frames read in sync** (what a UART gives while it keeps character sync, e.g. one or two
+//!   flips among the data and parity bits): after any 1- or 2-bit error, **no register ever
+//!   shows a value the host did not send for that register** (in this or an earlier sequence;
+//!   before the first sequence, 0): never a shifted display. The one exception the link cannot
+//!   see: a register whose own frame took both flips may show a wrong 7-bit value until the
+//!   next clean sequence (the link has no checksum).
+//! - **At bit level, through a bit receiver** ([`crate::line::BitReceiver`]), start, stop and
+//!   idle bits included: after any **1-bit** error no register shows a value the host did not
+//!   send for it; after any **1- or 2-bit** error **every register shows the host's value again
+//!   within two sequences**: once the reset byte closing the second sequence after the one the
+//!   damage fell in has arrived. Until then a 2-bit error that throws the receiver out of
+//!   character sync can show wrong 7-bit values (rare: beyond the register whose own frame took
+//!   both flips, 16 of 972 400 bit pairs with 7 registers, 160 of 1 566 400 with 1 register,
+//!   random values biased to many ones — the test `measure_wrong_values_after_two_flips`).
 //!
-//! Tested for every value 0–127 at every position of 7, 29 and 46 registers and every 1- and
-//! 2-bit change of its frame and of the reset bytes on both sides (frames read in sync), and at
-//! bit level, through a bit receiver ([`crate::line::BitReceiver`]), for every pair of bits
-//! flipped anywhere from the reset byte before a sequence to the reset byte after it — start,
-//! stop and idle bits included — with eight sets of values chosen to be hard (runs of `0x7F`,
-//! `0x7E`, 0, single bits, alternating bits). Without the idle byte time a receiver out of sync
-//! could read every frame as a framing error for as long as the data repeated (a display stale
-//! for good); without dropping a sequence on a damaged byte, frames read out of sync that passed
-//! the parity could be shown. The price: one byte time per sequence (`R + 2` byte times), and
+//! Recovery is bounded because the idle byte time after every reset byte lets a receiver that
+//! lost sync find the start bits again, whatever the data, and a damaged byte drops its
+//! sequence. Without the idle byte time a receiver out of sync could read every frame as a
+//! framing error for as long as the data repeated (one flipped start bit could leave a display
+//! stale for good); without dropping a sequence on a damaged byte, frames read out of sync that
+//! passed the parity could be shown. The idle time also creates the fake-reset pattern above; a
+//! display that recovers within two sequences from every 1- and 2-bit error was chosen over one
+//! that can freeze on one flip. The price: one byte time per sequence (`R + 2` byte times), and
 //! under noise a damaged byte costs its whole sequence, not one register, for one sequence.
+//!
+//! Tested, frame level: every value 0–127 at every position of 7, 29 and 46 registers and every
+//! 1- and 2-bit change of its frame and of the reset bytes on both sides, and one bit in each of
+//! two frames. Bit level: every single bit and every pair of bits from the reset byte opening a
+//! sequence through the idle byte time after the reset byte closing the next one (two whole
+//! sequences and the idle byte times on both sides), with eight sets of values chosen to be
+//! hard (runs of `0x7F`, `0x7E`, 0, single bits, alternating bits) and with random values, new
+//! every sequence, for 1, 2 and 7 registers.
 //!
 //! # The key handshake
 //! - The panel has a key: it raises **MOT**.
@@ -60,11 +72,18 @@
 //!   ([`Panel::tick_20ms`]).
 //! - Two **consecutive identical** clean bytes are the key ([`HostEvent::Key`]); the host drops
 //!   SÄN. A damaged byte in between starts the pair again, so a key is never altered by one
-//!   damaged byte and, because the host ignores the line until MOT has dropped, never delivered
-//!   twice.
-//! - SÄN dropped: the panel drops MOT (for two of its 20 ms ticks, so the host sees it) and
-//!   forgets the key; the host waits for MOT low and goes on with the registers (the reset byte
-//!   went out before the exchange), and sends a whole sequence before it answers MOT again.
+//!   damaged byte.
+//! - SÄN dropped: the panel drops MOT (for two of its 20 ms ticks) and forgets the key; the host
+//!   keeps SÄN low until MOT has read low on a poll since SÄN fell **and** three polls have
+//!   passed (or until [`HostConfig::mot_stuck_polls`]), goes on with the registers (the reset
+//!   byte went out before the exchange), and sends a whole sequence before it answers MOT
+//!   again. The third poll comes more than 20 ms after SÄN fell, so **a panel that samples SÄN
+//!   at least every 20 ms sees every key taken before SÄN rises again: no key is ever
+//!   delivered twice, whatever the MOT line does** (a MOT line that lies on single polls, or on
+//!   many). (Leaving on one poll that read MOT low let a chattering MOT line deliver a key twice.)
+//! - The panel must sample SÄN at least every 20 ms (and send the key byte when it sees SÄN
+//!   rise, and again every 20 ms while it is up); [`MIN_KEY_TIMEOUT_POLLS`] (6) is what that
+//!   takes: the second key byte arrives up to 42.3 ms after SÄN rose.
 //!
 //! A key waits at most one sequence (`R + 2` byte times) plus a poll and a byte time before
 //! SÄN rises.
@@ -72,7 +91,8 @@
 //! Beyond the source: the host gives up on a key after [`HostConfig::key_timeout_polls`] polls
 //! ([`HostEvent::KeyTimedOut`]) and on a MOT line that never drops after
 //! [`HostConfig::mot_stuck_polls`] ([`HostEvent::MotStuck`]: it goes back to refreshing and
-//! ignores MOT until it has seen it low). So **whatever the MOT line does** (stuck high, stuck
+//! ignores MOT for `mot_stuck_polls` polls more, or until it reads low; a panel holding a key is
+//! never ignored for good). So **whatever the MOT line does** (stuck high, stuck
 //! low, toggling at every poll, glitching), when the transmitter asks [`Host::next_byte`] once
 //! per byte time and MOT is polled every 10 ms, on a clean line **the panel shows a new sequence
 //! at least every `R + 3` byte times plus `key_timeout_polls + mot_stuck_polls` polls** (the
@@ -131,22 +151,47 @@ impl fmt::Display for RegisterError {
 
 impl core::error::Error for RegisterError {}
 
+/// The smallest [`HostConfig::key_timeout_polls`]: 6 polls.
+///
+/// A panel that samples SÄN every 20 ms sends the key byte up to 20 ms after SÄN rises and
+/// repeats it 20 ms later; the second byte has arrived one byte time (2.3 ms at 4 800 baud, 11
+/// bits) after that: up to 42.3 ms after SÄN rose. The host counts polls from the rise, and
+/// its first poll may come at once, so its `n`-th poll may come `(n − 1) · 10` ms after the
+/// rise: 5 polls may give up at 40 ms, before the second byte; 6 polls wait at least 50 ms.
+pub const MIN_KEY_TIMEOUT_POLLS: u16 = 6;
+
+/// The smallest [`HostConfig::mot_stuck_polls`]: 3 polls, the least the host keeps SÄN low
+/// after a key exchange (the third poll comes more than 20 ms after SÄN fell).
+pub const MIN_MOT_STUCK_POLLS: u16 = 3;
+
 /// Why a host configuration was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum ConfigError {
-    /// `key_timeout_polls` must be at least 1.
-    KeyTimeout,
-    /// `mot_stuck_polls` must be at least 1.
-    MotStuck,
+    /// `key_timeout_polls` below [`MIN_KEY_TIMEOUT_POLLS`]: the host would give up on keys
+    /// before a panel sampling SÄN every 20 ms has sent the key byte twice, on a clean line.
+    KeyTimeout(u16),
+    /// `mot_stuck_polls` below [`MIN_MOT_STUCK_POLLS`]: the host keeps SÄN low for that many
+    /// polls after every key exchange, whatever MOT does.
+    MotStuck(u16),
 }
 
 impl fmt::Display for ConfigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::KeyTimeout => f.write_str("key_timeout_polls must be at least 1"),
-            Self::MotStuck => f.write_str("mot_stuck_polls must be at least 1"),
+        match *self {
+            Self::KeyTimeout(polls) => write!(
+                f,
+                "key_timeout_polls {polls} is below {MIN_KEY_TIMEOUT_POLLS}: the second key byte \
+                 of a panel sampling SÄN every 20 ms arrives up to 42.3 ms after SÄN rises, and \
+                 poll 5 may come 40 ms after it (keys lost on a clean line)"
+            ),
+            Self::MotStuck(polls) => write!(
+                f,
+                "mot_stuck_polls {polls} is below {MIN_MOT_STUCK_POLLS}: the host keeps SÄN low \
+                 for 3 polls (over 20 ms) after a key exchange, so that a panel sampling SÄN \
+                 every 20 ms sees it low"
+            ),
         }
     }
 }
@@ -159,9 +204,11 @@ impl core::error::Error for ConfigError {}
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct HostConfig {
     /// Polls with SÄN up without two equal bytes before the key is given up (default 10 =
-    /// 100 ms: five repeats of the key).
+    /// 100 ms: five repeats of the key; at least [`MIN_KEY_TIMEOUT_POLLS`]).
     pub key_timeout_polls: u16,
-    /// Polls waiting for MOT to drop before the host refreshes again regardless (default 100).
+    /// Polls waiting for MOT to drop after a key exchange before the host refreshes again
+    /// regardless (default 100; at least [`MIN_MOT_STUCK_POLLS`]); a MOT still high then is
+    /// ignored for as many polls more, or until it reads low.
     ///
     /// `key_timeout_polls + mot_stuck_polls` polls is the longest a key exchange lasts, so the
     /// panel shows a new sequence at least every `R + 3` byte times plus that many polls.
@@ -213,8 +260,8 @@ enum HostState {
     Sending { next: usize },
     /// SÄN up, listening.
     AwaitKey { polls: u16, last: Option<u8> },
-    /// SÄN dropped, waiting for MOT to drop.
-    AwaitMotLow { polls: u16 },
+    /// SÄN dropped `polls` polls ago; `low`: MOT has read low since.
+    AwaitMotLow { polls: u16, low: bool },
 }
 
 /// The computer's side of one panel's link, with `R` registers (7, 29 or 46 in the source).
@@ -246,7 +293,8 @@ pub struct Host<const R: usize> {
     state: HostState,
     /// MOT as the last poll saw it (false while a stuck MOT is ignored).
     mot: bool,
-    ignore_mot: bool,
+    /// Polls a stuck MOT is still ignored for (until it reads low).
+    ignore_polls: u16,
     /// The reset byte closing a sequence has just gone out: a waiting key may be taken now.
     between: bool,
     /// The registers of a sequence have gone out: the next reset byte completes it.
@@ -260,14 +308,15 @@ impl<const R: usize> Host<R> {
     /// A host with every register 0, about to send a reset byte.
     ///
     /// # Errors
-    /// A time-out of 0 polls.
+    /// [`ConfigError`]: a key time-out below [`MIN_KEY_TIMEOUT_POLLS`] or a MOT time-out below
+    /// [`MIN_MOT_STUCK_POLLS`], with the value.
     pub const fn new(config: HostConfig) -> Result<Self, ConfigError> {
         const { assert!(R > 0, "a panel has at least one register") };
-        if config.key_timeout_polls == 0 {
-            return Err(ConfigError::KeyTimeout);
+        if config.key_timeout_polls < MIN_KEY_TIMEOUT_POLLS {
+            return Err(ConfigError::KeyTimeout(config.key_timeout_polls));
         }
-        if config.mot_stuck_polls == 0 {
-            return Err(ConfigError::MotStuck);
+        if config.mot_stuck_polls < MIN_MOT_STUCK_POLLS {
+            return Err(ConfigError::MotStuck(config.mot_stuck_polls));
         }
         Ok(Self {
             config,
@@ -275,7 +324,7 @@ impl<const R: usize> Host<R> {
             sending: [0; R],
             state: HostState::Sending { next: 0 },
             mot: false,
-            ignore_mot: false,
+            ignore_polls: 0,
             between: false,
             open: false,
             gap: false,
@@ -380,38 +429,54 @@ impl<const R: usize> Host<R> {
     }
 
     /// The 10 ms MOT poll, with the MOT line's state.
+    ///
+    /// After a key exchange (a key taken or given up) SÄN stays low until MOT has read low on
+    /// some poll since SÄN fell **and** at least [`MIN_MOT_STUCK_POLLS`] (3) polls have passed,
+    /// or until [`HostConfig::mot_stuck_polls`] polls have passed; then the host sends a whole
+    /// sequence before it can raise SÄN again. The third poll comes more than 20 ms after SÄN
+    /// fell, so SÄN stays low for more than 20 ms whatever MOT does: a panel that samples SÄN at
+    /// least every 20 ms sees the key taken before SÄN rises again, and **no key is delivered
+    /// twice, however the MOT line lies**. A MOT still high after `mot_stuck_polls` is ignored
+    /// for `mot_stuck_polls` polls more, or until it reads low.
     pub fn poll_mot(&mut self, mot: bool) -> Option<HostEvent> {
-        if !mot {
-            self.ignore_mot = false;
+        if mot {
+            self.ignore_polls = self.ignore_polls.saturating_sub(1);
+            self.mot = self.ignore_polls == 0;
+        } else {
+            self.ignore_polls = 0;
+            self.mot = false;
         }
-        self.mot = mot && !self.ignore_mot;
         match self.state {
             HostState::Sending { .. } => None, // MOT is looked at between sequences only
             HostState::AwaitKey { polls, last } => {
                 let polls = polls.saturating_add(1);
                 if polls >= self.config.key_timeout_polls {
                     self.stats.key_timeouts = self.stats.key_timeouts.saturating_add(1);
-                    self.state = HostState::AwaitMotLow { polls: 0 };
+                    self.state = HostState::AwaitMotLow {
+                        polls: 0,
+                        low: false,
+                    };
                     return Some(HostEvent::KeyTimedOut);
                 }
                 self.state = HostState::AwaitKey { polls, last };
                 None
             }
-            HostState::AwaitMotLow { polls } => {
+            HostState::AwaitMotLow { polls, low } => {
+                let polls = polls.saturating_add(1);
+                let low = low || !mot;
                 // Back to the registers where they stopped: right after a reset byte, so the
                 // next sequence goes out whole before MOT is looked at again.
-                if !mot {
+                if low && polls >= MIN_MOT_STUCK_POLLS {
                     self.state = HostState::Sending { next: 1 };
                     return None;
                 }
-                let polls = polls.saturating_add(1);
                 if polls >= self.config.mot_stuck_polls {
-                    self.ignore_mot = true;
+                    self.ignore_polls = self.config.mot_stuck_polls;
                     self.mot = false;
                     self.state = HostState::Sending { next: 1 };
                     return Some(HostEvent::MotStuck);
                 }
-                self.state = HostState::AwaitMotLow { polls };
+                self.state = HostState::AwaitMotLow { polls, low };
                 None
             }
         }
@@ -430,7 +495,10 @@ impl<const R: usize> Host<R> {
             }
             Ok(key) if last == Some(key) => {
                 self.stats.keys = self.stats.keys.saturating_add(1);
-                self.state = HostState::AwaitMotLow { polls: 0 };
+                self.state = HostState::AwaitMotLow {
+                    polls: 0,
+                    low: false,
+                };
                 Some(HostEvent::Key(key))
             }
             Ok(key) => {
@@ -663,20 +731,23 @@ mod tests {
         assert_eq!(host.set(0, RESET), Err(RegisterError::Value(RESET)));
         assert_eq!(host.set(6, 127), Ok(()));
         assert_eq!(host.registers(), &[0, 0, 0, 0, 0, 0, 127]);
-        assert!(
-            Host::<7>::new(HostConfig {
-                key_timeout_polls: 0,
-                mot_stuck_polls: 1
-            })
-            .is_err()
-        );
-        assert!(
-            Host::<7>::new(HostConfig {
-                key_timeout_polls: 1,
-                mot_stuck_polls: 0
-            })
-            .is_err()
-        );
+        let config = |key_timeout_polls, mot_stuck_polls| HostConfig {
+            key_timeout_polls,
+            mot_stuck_polls,
+        };
+        // The boundaries: 6 polls of key time-out, 2 of MOT time-out.
+        for kt in 0..MIN_KEY_TIMEOUT_POLLS {
+            let e = Host::<7>::new(config(kt, 100)).unwrap_err();
+            assert_eq!(e, ConfigError::KeyTimeout(kt));
+            assert!(e.to_string().contains("below 6"), "{e}");
+        }
+        assert!(Host::<7>::new(config(MIN_KEY_TIMEOUT_POLLS, 100)).is_ok());
+        for ms in 0..MIN_MOT_STUCK_POLLS {
+            let e = Host::<7>::new(config(10, ms)).unwrap_err();
+            assert_eq!(e, ConfigError::MotStuck(ms));
+            assert!(e.to_string().contains("sees it low"), "{e}");
+        }
+        assert!(Host::<7>::new(config(10, MIN_MOT_STUCK_POLLS)).is_ok());
     }
 
     #[test]
@@ -787,6 +858,10 @@ mod tests {
         assert!(!panel.mot());
         assert_eq!(host.next_byte(), None);
         host.poll_mot(panel.mot());
+        assert_eq!(host.next_byte(), None); // SÄN stays low for three polls (over 20 ms)
+        host.poll_mot(panel.mot());
+        assert_eq!(host.next_byte(), None);
+        host.poll_mot(panel.mot());
         assert_eq!(host.next_byte(), None); // idle, then the registers
         assert_eq!(host.next_byte(), Some(0));
         assert_eq!(host.stats().keys, 1);
@@ -795,7 +870,7 @@ mod tests {
     #[test]
     fn a_dead_panel_cannot_stop_the_displays() {
         let mut host: Host<7> = Host::new(HostConfig {
-            key_timeout_polls: 3,
+            key_timeout_polls: 6,
             mot_stuck_polls: 4,
         })
         .unwrap();
@@ -803,21 +878,34 @@ mod tests {
         host.poll_mot(true);
         assert_eq!(host.next_byte(), Some(RESET));
         assert_eq!(host.next_byte(), None);
-        for _ in 0..20 {
-            events.extend(host.poll_mot(true));
+        for _ in 0..10 {
+            events.extend(host.poll_mot(true)); // 6 polls of key time-out, 4 of MOT time-out
         }
         assert_eq!(events, vec![HostEvent::KeyTimedOut, HostEvent::MotStuck]);
-        // Still ignoring the stuck MOT until it drops once: whole sequences go out.
+        // The stuck MOT is ignored for `mot_stuck_polls` (4) polls: whole sequences go out.
         for _ in 0..3 {
             assert_eq!(host.poll_mot(true), None);
             assert_eq!(host.next_byte(), None); // idle after the reset byte
             assert!((0..7).all(|_| host.next_byte().is_some()));
             assert_eq!(host.next_byte(), Some(RESET));
+            assert!(!host.san());
         }
+        // The fourth poll: answered again (a panel holding a key is never ignored for good).
+        host.poll_mot(true);
+        assert_eq!(host.next_byte(), None);
+        assert!(host.san());
+        // Given up again, stuck again; this time MOT reads low once: answered at once.
+        events.clear();
+        for _ in 0..10 {
+            events.extend(host.poll_mot(true));
+        }
+        assert_eq!(events, vec![HostEvent::KeyTimedOut, HostEvent::MotStuck]);
         assert!(!host.san());
-        // MOT dropped once: the next boundary between sequences (here, now) takes the key.
         host.poll_mot(false);
         host.poll_mot(true);
+        assert_eq!(host.next_byte(), None); // the idle byte time after the reset byte
+        assert!((0..7).all(|_| host.next_byte().is_some()));
+        assert_eq!(host.next_byte(), Some(RESET));
         assert_eq!(host.next_byte(), None);
         assert!(host.san());
     }

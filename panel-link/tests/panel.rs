@@ -87,6 +87,13 @@ struct Sim<const R: usize> {
     polls: usize,
     /// The host's transmitter was told to leave the line idle until then (µs).
     idle_until: u64,
+    /// The panel samples the SÄN wire only on its 20 ms tick (the slowest the handshake
+    /// allows), not at every step.
+    san_on_tick: bool,
+    /// When SÄN last rose (µs), while it is up.
+    san_since: Option<u64>,
+    /// The longest time from SÄN rising to the key delivered (µs).
+    longest_key_exchange: u64,
 }
 
 impl<const R: usize> Sim<R> {
@@ -104,6 +111,9 @@ impl<const R: usize> Sim<R> {
             mot_glitch: Vec::new(),
             polls: 0,
             idle_until: 0,
+            san_on_tick: false,
+            san_since: None,
+            longest_key_exchange: 0,
         }
     }
 
@@ -139,14 +149,25 @@ impl<const R: usize> Sim<R> {
             self.up.sent += 1;
             let frame = self.damage(frame, false, index);
             match self.host.receive(framing.decode(frame)) {
-                Some(HostEvent::Key(k)) => self.delivered.push(k),
+                Some(HostEvent::Key(k)) => {
+                    self.delivered.push(k);
+                    let since = self.san_since.unwrap();
+                    self.longest_key_exchange = self.longest_key_exchange.max(self.now - since);
+                }
                 Some(HostEvent::KeyTimedOut) => self.timeouts += 1,
                 _ => {}
             }
         }
-        // The SÄN wire, sampled by the panel every step.
-        if let Some(key) = self.panel.set_san(self.host.san()) {
-            self.up.queue.push_back(framing.encode(key));
+        self.san_since = match (self.host.san(), self.san_since) {
+            (true, None) => Some(self.now),
+            (true, since) => since,
+            (false, _) => None,
+        };
+        // The SÄN wire, sampled by the panel every step (or only on its tick, below).
+        if !self.san_on_tick {
+            if let Some(key) = self.panel.set_san(self.host.san()) {
+                self.up.queue.push_back(framing.encode(key));
+            }
         }
         if self.now.is_multiple_of(10_000) {
             let glitch = match self.mot_glitch.len() {
@@ -159,7 +180,13 @@ impl<const R: usize> Sim<R> {
             }
         }
         if self.now % 20_000 == self.tick_phase {
-            if let Some(key) = self.panel.tick_20ms() {
+            let sampled = if self.san_on_tick {
+                self.panel.set_san(self.host.san())
+            } else {
+                None
+            };
+            let repeat = self.panel.tick_20ms();
+            if let Some(key) = sampled.or(repeat) {
                 self.up.queue.push_back(framing.encode(key));
             }
         }
@@ -298,6 +325,157 @@ proptest! {
         prop_assert_eq!(sim.panel.keys_waiting(), 0);
         prop_assert_eq!(sim.delivered.len(), delivered + waiting);
     }
+}
+
+/// Makes a repeating glitch pattern one where no two consecutive polls lie (the last poll and
+/// the first count as consecutive: the pattern repeats).
+fn no_two_consecutive(mut glitch: Vec<bool>) -> Vec<bool> {
+    for i in 1..glitch.len() {
+        if glitch[i - 1] {
+            glitch[i] = false;
+        }
+    }
+    let n = glitch.len();
+    if n > 0 && glitch[0] && glitch[n - 1] {
+        glitch[n - 1] = false;
+    }
+    glitch
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(150))]
+
+    /// Issue 19 (attack, item 2): a MOT line that lies on any polls (any repeating pattern of
+    /// lies, and patterns in which no two consecutive polls lie), a panel that samples SÄN only
+    /// on its 20 ms tick (the slowest the handshake allows) or at once, 1, 2 or 7 registers: no
+    /// key is ever delivered twice, none is altered, they come in the order pressed.
+    #[test]
+    fn a_lying_mot_line_never_delivers_a_key_twice(
+        n in 1usize..6,
+        glitch in proptest::collection::vec(any::<bool>(), 1..40),
+        single in any::<bool>(),
+        phase in 0u64..200,
+        san_on_tick in any::<bool>(),
+        registers in 0usize..3,
+    ) {
+        let glitch = if single { no_two_consecutive(glitch) } else { glitch };
+        let keys: Vec<u8> = (0..n as u8).map(|k| 0x41 + k).collect();
+        let delivered = match registers {
+            0 => mot_lies::<1>(&keys, &glitch, phase, san_on_tick),
+            1 => mot_lies::<2>(&keys, &glitch, phase, san_on_tick),
+            _ => mot_lies::<7>(&keys, &glitch, phase, san_on_tick),
+        };
+        // Distinct keys pressed in increasing order: delivered must be strictly increasing.
+        prop_assert!(
+            delivered.windows(2).all(|w| w[0] < w[1]) && delivered.iter().all(|k| keys.contains(k)),
+            "pressed {:?}, delivered {:?}, MOT lies {:?}", keys, delivered, glitch
+        );
+    }
+}
+
+fn mot_lies<const R: usize>(
+    keys: &[u8],
+    glitch: &[bool],
+    phase: u64,
+    san_on_tick: bool,
+) -> Vec<u8> {
+    let mut sim: Sim<R> = Sim::new(Damage::None, phase * 100);
+    sim.mot_glitch = glitch.to_vec();
+    sim.san_on_tick = san_on_tick;
+    for &k in keys {
+        sim.panel.press(k).unwrap();
+    }
+    sim.run_ms(3_000);
+    sim.delivered
+}
+
+/// Issue 19 (attack, item 5): on a clean line, a panel that samples SÄN only on its 20 ms tick,
+/// at phases of that tick (700 µs apart over 20 ms) and of the host's sequences (100 µs apart
+/// over 10 ms) against the host's polls, with the smallest key
+/// time-out the host accepts: every key is delivered, none times out. And the second key byte
+/// does arrive more than 40 ms after SÄN rose at some phase, so 5 polls (the 5th may come 40 ms
+/// after the rise) would lose keys: 6 is the least that works.
+#[test]
+fn the_smallest_key_time_out_loses_no_key_on_a_clean_line() {
+    let config = HostConfig {
+        key_timeout_polls: regler_panel_link::panel::MIN_KEY_TIMEOUT_POLLS,
+        ..HostConfig::default()
+    };
+    assert_eq!(config.key_timeout_polls, 6);
+    let mut longest = 0;
+    for phase in (0..200).step_by(7) {
+        for offset in 0..100 {
+            let mut sim: Sim<7> = Sim::new(Damage::None, phase * 100);
+            sim.host = Host::new(config).unwrap();
+            sim.san_on_tick = true;
+            sim.idle_until = offset * STEP_US; // the host starts sending then
+            let keys = [0x10, 0x11];
+            for k in keys {
+                sim.panel.press(k).unwrap();
+            }
+            sim.run_ms(200);
+            let at = (phase * 100, offset * 100);
+            assert_eq!(sim.delivered, keys, "tick phase, host start (µs): {at:?}");
+            assert_eq!(sim.timeouts, 0);
+            longest = longest.max(sim.longest_key_exchange);
+        }
+    }
+    assert!(
+        (40_000..=40_000 + BYTE_US + 2 * STEP_US).contains(&longest),
+        "the second key byte came {longest} µs after SÄN rose"
+    );
+}
+
+/// The attacker's timed reproducer: one MOT poll reads low while the panel still holds MOT high,
+/// the panel samples SÄN on its 20 ms tick. The host used to leave the exchange on that one low
+/// poll, send a sequence (shorter than 20 ms for two registers) and raise SÄN again before the
+/// panel ever saw it low: the key was delivered twice.
+#[test]
+fn one_false_mot_low_poll_does_not_deliver_a_key_twice() {
+    let mut host: Host<2> = Host::new(HostConfig::default()).unwrap();
+    let mut panel: Panel<2> = Panel::new();
+    let mut keys = vec![];
+    panel.press(0x41).unwrap();
+    host.poll_mot(panel.mot()); // t = 0 ms: MOT high
+    assert_eq!(host.next_byte(), Some(RESET));
+    assert_eq!(host.next_byte(), None); // SÄN rises between sequences
+    assert!(host.san());
+    let k = panel.set_san(host.san()).unwrap(); // 20 ms tick: SÄN sampled high
+    keys.extend(host.receive(Ok(k)));
+    let _ = host.poll_mot(panel.mot()); // 30 ms
+    let k = panel.tick_20ms().unwrap(); // 40 ms: the repeat (SÄN sampled: still high)
+    keys.extend(host.receive(Ok(k)));
+    assert_eq!(keys, [HostEvent::Key(0x41)]);
+    assert!(!host.san()); // ≈ 42 ms: SÄN dropped
+    assert!(panel.mot());
+    host.poll_mot(false); // 50 ms: the MOT line lies low for one poll
+    for _ in 0..4 {
+        let _ = host.next_byte(); // 4 byte times: what a sequence of two registers takes
+    }
+    host.poll_mot(panel.mot()); // 60 ms: MOT (really high) seen
+    let _ = host.next_byte();
+    // 60 ms tick: the panel samples SÄN. With the bug it was high again (the panel never saw
+    // it low) and the key went out once more.
+    let _ = panel.set_san(host.san());
+    for poll in 0..20 {
+        if let Some(k) = panel.tick_20ms() {
+            keys.extend(host.receive(Ok(k)));
+        }
+        let _ = host.poll_mot(panel.mot());
+        for _ in 0..8 {
+            let _ = host.next_byte();
+        }
+        let _ = host.poll_mot(panel.mot());
+        if let Some(k) = panel.set_san(host.san()) {
+            keys.extend(host.receive(Ok(k)));
+        }
+        assert!(poll < 19 || panel.keys_waiting() == 0);
+    }
+    assert_eq!(
+        keys,
+        [HostEvent::Key(0x41)],
+        "one press of 0x41, the host delivered {keys:?}"
+    );
 }
 
 #[test]
@@ -634,11 +812,11 @@ fn every_short_periodic_mot_pattern_keeps_the_displays_refreshed() {
     for config in [
         HostConfig::default(),
         HostConfig {
-            key_timeout_polls: 1,
-            mot_stuck_polls: 1,
+            key_timeout_polls: 6,
+            mot_stuck_polls: 3,
         },
         HostConfig {
-            key_timeout_polls: 3,
+            key_timeout_polls: 7,
             mot_stuck_polls: 5,
         },
     ] {
@@ -666,8 +844,8 @@ proptest! {
     #[test]
     fn any_mot_pattern_keeps_the_displays_refreshed(
         runs in proptest::collection::vec((any::<bool>(), 1u64..150), 1..40),
-        key_timeout_polls in 1u16..30,
-        mot_stuck_polls in 1u16..150,
+        key_timeout_polls in 6u16..30,
+        mot_stuck_polls in 3u16..150,
     ) {
         let config = HostConfig { key_timeout_polls, mot_stuck_polls };
         let levels: Vec<bool> = runs.iter().flat_map(|&(l, n)| (0..n).map(move |_| l)).collect();
@@ -678,36 +856,55 @@ proptest! {
 
 /// The register stream as bits on the line, frames back to back as a UART sends them when it is
 /// fed whenever it is ready — with the idle byte time the host leaves after every reset byte —
-/// through a bit receiver (which loses character sync when a start bit
-/// is hit): every single bit and every pair of bits flipped anywhere in the frames from the
-/// reset byte before a sequence to the reset byte after it, start, stop and idle bits included.
-/// After every byte, every register shows a value the host sent for it, or — only for the
-/// register whose own frame (or the line bit just before it) took the flips — some 7-bit value;
-/// and in every
-/// case the display is right once the sequence after the next reset byte read in sync is through,
-/// which must happen within the sequence after the flips. Returns the number of cases.
-fn every_bit_pair_on_the_line<const R: usize>(a: &[u8; R], b: &[u8; R]) -> u64 {
+/// through a bit receiver (which loses character sync when a start bit is hit). The host's
+/// registers are set to `values[k]` before sequence `k` goes out (its reset byte opens it; its
+/// idle byte time and registers follow). Every single bit and every pair of bits is flipped in
+/// the window from the reset byte opening sequence 2 through the idle byte time after the reset
+/// byte closing sequence 3 (two whole sequences and the idle byte times on both sides; start,
+/// stop and idle bits included). Checks the guarantee as the module docs state it at bit level:
+/// - after a **1-bit** error, no register ever shows a value the host did not send for it (in
+///   a sequence that has begun, or 0 before the first);
+/// - after a 1- or 2-bit error, once the reset byte closing the second sequence after the one
+///   the (last) flip fell in has arrived, every register shows the host's value of that second
+///   sequence — and the next sequence's one reset byte later.
+///
+/// Returns (cases, pairs that showed a value never sent before recovery, not counting pairs
+/// that both fell in one register's own frame — for the first register, its frame and the idle
+/// byte time before it — which frames read in sync can show too).
+fn every_bit_pair_on_the_line<const R: usize>(values: &[[u8; R]]) -> (u64, u64) {
+    assert!(values.len() >= 9, "the stream needs nine sequences");
     let framing = Framing::PANEL;
-    let slot_len = R + 2; // the reset byte, the idle byte time, R registers
-    let slots = slots::<R>(a, b, 14 * (R + 1));
-    let mut bits: Vec<bool> = vec![true; 3];
-    for slot in &slots {
+    let mut host: Host<R> = Host::new(HostConfig::default()).unwrap();
+    // Byte time by byte time: the slot, and the sequence it belongs to.
+    let mut slots: Vec<(Option<u8>, usize)> = Vec::new();
+    let mut seq = 0usize;
+    while slots.len() < 9 * (R + 2) {
+        if slots.len().is_multiple_of(R + 2) {
+            seq = slots.len() / (R + 2);
+            for (i, &v) in values[seq].iter().enumerate() {
+                host.set(i, v).unwrap();
+            }
+        }
+        slots.push((host.next_byte(), seq));
+    }
+    for (n, (slot, _)) in slots.iter().enumerate() {
+        match n % (R + 2) {
+            0 => assert_eq!(*slot, Some(RESET), "the stream's layout"),
+            1 => assert_eq!(*slot, None, "the stream's layout"),
+            _ => assert!(slot.is_some_and(|v| v <= MAX_VALUE), "the stream's layout"),
+        }
+    }
+    let mut bits: Vec<bool> = vec![true; 3]; // the line idle before the host starts
+    let mut seq_of_bit: Vec<usize> = vec![0; 3];
+    for &(slot, seq) in &slots {
         let frame = slot.map_or(0x7FF, |byte| framing.encode(byte)); // idle: all ones
         bits.extend((0..11).map(|k| frame >> k & 1 == 1));
+        seq_of_bit.extend([seq; 11]);
     }
-    // The slot a bit index ends, when it ends one: (slot, what the host put there).
-    let slot_at = |k: usize| -> Option<(usize, Option<u8>)> {
-        let n = (k + 1).checked_sub(3)?;
-        if n == 0 || !n.is_multiple_of(11) {
-            return None;
-        }
-        let s = n / 11 - 1;
-        Some((s, *slots.get(s)?))
-    };
-    // The window: the reset byte that opens sequence `b` (slot `slot_len`), its idle byte time
-    // and registers, through the reset byte that closes it (slot `2 * slot_len`).
-    let first = 3 + 11 * slot_len;
-    let window = first..first + 11 * (slot_len + 1);
+    // One past the last bit of the reset byte opening sequence k.
+    let reset_end = |k: usize| 3 + 11 * (k * (R + 2) + 1);
+    let first = reset_end(2) - 11;
+    let window = first..reset_end(4) + 11;
     let mut rx0 = BitReceiver::new(framing);
     let mut panel0: Panel<R> = Panel::new();
     for &bit in &bits[..first] {
@@ -715,62 +912,53 @@ fn every_bit_pair_on_the_line<const R: usize>(a: &[u8; R], b: &[u8; R]) -> u64 {
             panel0.receive(got);
         }
     }
-    let end = first + 11 * (10 * slot_len + 1);
-    let mut cases = 0;
+    let (mut cases, mut wrong_pairs) = (0, 0);
     for i in window.clone() {
         for j in i..window.end {
             cases += 1;
             let (mut rx, mut panel) = (rx0, panel0.clone());
-            let mut allow = allowed(a, b);
-            // The register whose own frame took both flips may show a wrong 7-bit value: two
-            // flips that pass the parity cannot be told from a good frame. For the first
-            // register, the idle byte time before it counts as its own: a flip there is a
-            // false start bit, and a second flip can make the frame read from it pass.
-            for (s, slot) in slots.iter().enumerate() {
-                let start = 3 + 11 * s;
-                let own = if s % slot_len == 2 { start - 11 } else { start }..start + 11;
-                if slot.is_some_and(|v| v != RESET) && own.contains(&i) && own.contains(&j) {
-                    allow[s % slot_len - 2] = u128::MAX;
-                }
-            }
+            let damaged = seq_of_bit[j];
+            let (check, last_check) = (reset_end(damaged + 3), reset_end(damaged + 4));
             let mut last = *panel.registers();
-            let mut right_by = None;
-            for (k, &bit) in bits[first..end].iter().enumerate() {
-                let k = k + first;
-                let Some(got) = rx.bit(bit ^ (k == i || k == j)) else {
-                    continue;
-                };
-                if let (Ok(w), Some((_, host_byte))) = (got, slot_at(k)) {
-                    if w == RESET && host_byte == Some(RESET) && k > j && right_by.is_none() {
-                        right_by = Some(k + 11 * slot_len);
-                    }
+            let mut wrong = false;
+            for (k, &bit) in bits.iter().enumerate().take(last_check).skip(first) {
+                if let Some(got) = rx.bit(bit ^ (k == i || k == j)) {
+                    panel.receive(got);
                 }
-                panel.receive(got);
                 if panel.registers() != &last {
                     last = *panel.registers();
-                    assert_allowed(&last, &allow, &|| {
-                        format!("bits {i} and {j} flipped, slots {slots:?}")
-                    });
+                    let begun = seq_of_bit[k];
+                    for (r, &v) in last.iter().enumerate() {
+                        if v != 0 && values[..=begun].iter().all(|s| s[r] != v) {
+                            assert!(
+                                i != j,
+                                "R {R}: one bit ({i}) flipped, register {r} shows {v}, which \
+                                 the host never sent for it; values {values:?}"
+                            );
+                            wrong = true;
+                        }
+                    }
                 }
-                if right_by == Some(k) {
+                if k + 1 == check || k + 1 == last_check {
+                    let shown = if k + 1 == check {
+                        damaged + 2
+                    } else {
+                        damaged + 3
+                    };
                     assert_eq!(
                         panel.registers(),
-                        b,
-                        "bits {i} and {j} flipped: not right after the first sequence in sync"
+                        &values[shown],
+                        "R {R}: bits {i} and {j} flipped (sequence {damaged}): not right at the \
+                         reset byte closing sequence {shown}; values {values:?}"
                     );
                 }
             }
-            // Back in sync within the sequence after the flips (an idle byte time follows
-            // every reset byte), and right one sequence later.
-            let bound = window.end + 11 * slot_len;
-            assert!(
-                right_by.is_some_and(|k| k <= bound + 11 * slot_len),
-                "bits {i} and {j} flipped: the receiver did not read a reset byte in sync \
-                 within a sequence ({right_by:?}), slots {slots:?}"
-            );
+            let (si, sj) = ((i - 3) / 11, (j - 3) / 11);
+            let own_frame = (si == sj && si % (R + 2) >= 2) || (si % (R + 2) == 1 && sj == si + 1);
+            wrong_pairs += u64::from(wrong && !own_frame);
         }
     }
-    cases
+    (cases, wrong_pairs)
 }
 
 #[test]
@@ -794,9 +982,131 @@ fn every_1_and_2_bit_error_on_the_line() {
             [0x55, 0x2A, 0x55, 0x2A, 0x55, 0x2A, 0x55],
         ),
     ] {
-        cases += every_bit_pair_on_the_line::<7>(&a, &b);
+        // `a` for the first two sequences, `b` from the window on (constant data: the case in
+        // which a receiver out of sync stayed out of sync before the idle byte time).
+        let values: Vec<[u8; 7]> = (0..9).map(|k| if k < 2 { a } else { b }).collect();
+        cases += every_bit_pair_on_the_line::<7>(&values).0;
     }
-    assert!(cases > 8 * 4_000);
+    assert!(cases > 8 * 24_000);
+}
+
+/// The attacker's reproducer (issue 19, panel attack item 1): the start bit of the last
+/// register and bit 7 of the idle byte time after the reset byte closing the sequence. The
+/// receiver, out of sync, reads a frame that passes the parity, then the reset byte's parity
+/// bit as a start bit and 0xFF from the stop bit and the idle ones; the flipped idle bit makes
+/// that a clean frame: a fake reset byte, and a wrong value is shown. That is the 2-bit case
+/// the guarantee leaves open; it must be right two sequences later.
+#[test]
+fn two_flips_out_of_sync_are_right_within_two_sequences() {
+    let values = [0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x73];
+    let framing = Framing::PANEL;
+    let mut host: Host<7> = Host::new(HostConfig::default()).unwrap();
+    for (i, v) in values.iter().enumerate() {
+        host.set(i, *v).unwrap();
+    }
+    let mut rx = BitReceiver::new(framing);
+    let mut panel: Panel<7> = Panel::new();
+    let (mut resets, mut registers, mut idle_times) = (0, 0, 0);
+    let (mut wrong, mut right_again) = (None, None);
+    for _ in 0..80 {
+        let b = host.next_byte();
+        let mut frame = b.map_or(0x7FF, |b| framing.encode(b));
+        match b {
+            Some(RESET) => {
+                resets += 1;
+                registers = 0;
+            }
+            Some(_) => {
+                registers += 1;
+                if resets == 3 && registers == 7 {
+                    frame |= 1; // the start bit of register 7 of sequence 3
+                }
+            }
+            None => {
+                idle_times += 1;
+                if idle_times == 4 {
+                    frame &= !(1 << 7); // bit 7 of the idle byte time closing sequence 3
+                }
+            }
+        }
+        for k in 0..11 {
+            if let Some(byte) = rx.bit(frame >> k & 1 == 1) {
+                panel.receive(byte);
+                if *panel.registers() != [0; 7] && *panel.registers() != values {
+                    wrong.get_or_insert(*panel.registers());
+                }
+                if byte == Ok(RESET) && resets == 6 && right_again.is_none() {
+                    right_again = Some(*panel.registers());
+                }
+            }
+        }
+    }
+    assert!(
+        wrong.is_some(),
+        "the attacker's case shows a wrong value (documented)"
+    );
+    assert_eq!(
+        right_again,
+        Some(values),
+        "right at the reset byte closing sequence 5"
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(6))]
+
+    /// The same guarantee with random register values, new ones every sequence, for 1, 2 and 7
+    /// registers: every single bit and bit pair over two sequences and the idle byte times on
+    /// both sides.
+    #[test]
+    fn every_bit_pair_on_the_line_random_values(
+        one in proptest::collection::vec(0u8..=127, 9),
+        two in proptest::collection::vec(proptest::array::uniform2(0u8..=127), 9),
+        seven in proptest::collection::vec(proptest::array::uniform7(0u8..=127), 9),
+    ) {
+        let one: Vec<[u8; 1]> = one.into_iter().map(|v| [v]).collect();
+        every_bit_pair_on_the_line::<1>(&one);
+        every_bit_pair_on_the_line::<2>(&two);
+        every_bit_pair_on_the_line::<7>(&seven);
+    }
+}
+
+/// How often a 2-bit error through a bit receiver shows a value the host never sent (beyond
+/// the register whose own frame took both flips), with random values (biased to many ones:
+/// 0x7F, 0x7E-like values make fake reset bytes likely):
+/// a measurement, printed; it asserts only the guarantee. `cargo test --release -- --ignored
+/// --nocapture measure`.
+#[test]
+#[ignore = "a measurement (minutes in debug)"]
+fn measure_wrong_values_after_two_flips() {
+    let mut seed = 1u64;
+    let mut next = move || {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (seed >> 33) as u8
+    };
+    let mut value = move || match next() % 4 {
+        0 => 0x7F ^ (1 << (next() % 7)),
+        1 => 0x7F,
+        _ => next() & 0x7F,
+    };
+    let (mut cases, mut wrong) = (0, 0);
+    for _ in 0..40 {
+        let values: Vec<[u8; 7]> = (0..9).map(|_| core::array::from_fn(|_| value())).collect();
+        let (c, w) = every_bit_pair_on_the_line::<7>(&values);
+        cases += c;
+        wrong += w;
+    }
+    println!("R = 7: {wrong} of {cases} bit pairs showed a value never sent");
+    let (mut cases, mut wrong) = (0, 0);
+    for _ in 0..400 {
+        let values: Vec<[u8; 1]> = (0..9).map(|_| [value()]).collect();
+        let (c, w) = every_bit_pair_on_the_line::<1>(&values);
+        cases += c;
+        wrong += w;
+    }
+    println!("R = 1: {wrong} of {cases} bit pairs showed a value never sent");
 }
 
 proptest! {
