@@ -13,8 +13,11 @@ pub struct SlaveConfig {
     /// The slave's address on the link.
     pub address: u8,
     /// Items per row of the pattern (≥ 1): the slave changes source only at a row boundary.
+    /// With `silence_limit` and the ring's `N`, at most [`MAX_DRIFT`] (see there).
     pub row_len: u16,
-    /// Steps without a frame from the master after which it counts as silent (≥ 1).
+    /// Steps without a frame from the master after which it counts as silent (≥ 1). Every step
+    /// of an outage before that is an underrun that moves the board's counters on, so
+    /// `silence_limit + row_len + N` must be at most [`MAX_DRIFT`] (32 767).
     pub silence_limit: u32,
     /// Steps a slave owed items waits without a refill before it reports again with the retry
     /// flag (≥ 1); also the period of its reports while stand-alone or saying hello.
@@ -27,6 +30,21 @@ pub struct SlaveConfig {
     pub boot: u8,
 }
 
+/// The most `silence_limit + row_len + N` a [`Slave`] accepts: 32 767, the largest count the
+/// master's 16-bit counter extension reads as "ahead".
+///
+/// While no report of the board reaches the master (a link outage), the board's `consumed`
+/// count moves at most `max(2·d + silence_limit + 1, N) + row_len − 1` past the newest report
+/// the master holds, for a master that grants the board at most `N` items ahead and a link whose
+/// round trip (a report out, the master's answer back) takes at most `2·d` steps: `2·d` steps
+/// until the master's last answer arrives, `silence_limit + 1` steps of underruns before the
+/// master counts as silent (or up to the `N` items the master had granted, taken from the
+/// ring), and the rest of the row cut short (`row_len − 1` [`Source::Fallback`] items); then the
+/// board is stand-alone and its count stands still. With `silence_limit + row_len + N ≤ 32 767`
+/// and a ring of at least `4·d` slots (the relink bound's condition) that is at most 32 767, so
+/// the master takes the board's first report after any outage, however long.
+pub const MAX_DRIFT: u64 = 0x7FFF;
+
 /// Why a [`SlaveConfig`] was refused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -38,6 +56,18 @@ pub enum SlaveConfigError {
     ZeroSilenceLimit,
     /// `retry_after` = 0: every step would be a retry.
     ZeroRetry,
+    /// `silence_limit + row_len + N` exceeds [`MAX_DRIFT`]: during an outage the board's
+    /// 16-bit `consumed` count could run half its range or more past the newest report the
+    /// master holds, and the master would take every later report for an old one (the board
+    /// would stay stand-alone for good). The fields: `silence_limit`, `row_len`, `N`.
+    Drift {
+        /// `silence_limit` as given.
+        silence_limit: u32,
+        /// `row_len` as given.
+        row_len: u16,
+        /// The ring's slots.
+        capacity: usize,
+    },
     /// The ring has 0 slots or more than 32 767 (the 16-bit counters need half their range).
     Capacity(usize),
 }
@@ -49,6 +79,15 @@ impl fmt::Display for SlaveConfigError {
             Self::ZeroSilenceLimit => write!(f, "silence_limit must be at least 1 step"),
             Self::ZeroRetry => write!(f, "retry_after must be at least 1 step"),
             Self::Capacity(n) => write!(f, "ring must have 1..=32767 slots, got {n}"),
+            Self::Drift {
+                silence_limit,
+                row_len,
+                capacity,
+            } => write!(
+                f,
+                "silence_limit + row_len + ring slots must be at most {MAX_DRIFT}, got \
+                 {silence_limit} + {row_len} + {capacity}"
+            ),
         }
     }
 }
@@ -254,6 +293,17 @@ impl<const N: usize> Slave<N> {
         }
         if N == 0 || N > 0x7FFF {
             return Err(SlaveConfigError::Capacity(N));
+        }
+        #[allow(clippy::cast_possible_truncation, reason = "N <= 0x7FFF was checked")]
+        let sum = (config.silence_limit as u64)
+            .saturating_add(config.row_len as u64)
+            .saturating_add(N as u64);
+        if sum > MAX_DRIFT {
+            return Err(SlaveConfigError::Drift {
+                silence_limit: config.silence_limit,
+                row_len: config.row_len,
+                capacity: N,
+            });
         }
         Ok(Self {
             config,
