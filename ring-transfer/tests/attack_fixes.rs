@@ -318,3 +318,38 @@ fn drift_stays_within_the_stated_bound() {
     one::<13>(&mut reached);
     assert_eq!(reached, 1, "the bound is reached somewhere");
 }
+
+/// A report near the end of the clock: the deadline saturates at `u64::MAX`, and the items
+/// still owed are still granted (a saturated deadline used to read as "nothing owed").
+#[test]
+fn edf_deadline_near_u64_max_still_served() {
+    for (now, t0) in [(u64::MAX - 10, 1000), (u64::MAX, 1), (u64::MAX - 3, 1)] {
+        let mut m: Master<2> = Master::new();
+        m.attach(0, SlaveParams { capacity: 8, t0 }).unwrap();
+        m.attach(1, SlaveParams { capacity: 8, t0 }).unwrap();
+        let report = Report {
+            slave: 0,
+            consumed: 0,
+            received: 0,
+            standalone: false,
+            retry: false,
+            boot: 0,
+            hello: false,
+        };
+        assert_eq!(
+            m.on_report(now, 0, &report),
+            Ok(ReportOutcome::Accepted { owed: 8 })
+        );
+        let mut granted = 0;
+        while let Some(g) = m.next_refill(now, 3) {
+            assert_eq!(g.slave, 0);
+            assert_eq!(g.first, granted);
+            granted += u64::from(g.count);
+            assert_eq!(m.status(0).unwrap().owed, 8 - granted as u32);
+            assert!(granted <= 8);
+        }
+        assert_eq!(granted, 8, "now {now}, t0 {t0}: every owed item granted");
+        assert_eq!(m.status(0).unwrap().owed, 0);
+        assert_eq!(m.earliest(), None);
+    }
+}
