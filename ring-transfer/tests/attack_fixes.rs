@@ -353,3 +353,42 @@ fn edf_deadline_near_u64_max_still_served() {
         assert_eq!(m.earliest(), None);
     }
 }
+
+/// 2 000 slaves beside one fast one: few points per slave but 2·10¹⁰ demand terms. Refused
+/// at once now (it ran 40 s in release): the cap bounds points × slaves.
+#[test]
+fn many_slaves_times_many_points_is_refused_promptly() {
+    use regler_ring_transfer::capacity::{CapacityError, LinkSpec, Load, MAX_POINTS, check};
+    let mut loads = vec![
+        Load {
+            t0: 2_000_000,
+            ring: 10
+        };
+        2_000
+    ];
+    loads[0] = Load { t0: 2, ring: 3 };
+    let link = LinkSpec {
+        item_time: 1,
+        latency: 0,
+    };
+    let started = std::time::Instant::now();
+    let verdict = check(&loads, link);
+    assert!(
+        matches!(verdict, Err(CapacityError::TooComplex { points }) if points > MAX_POINTS),
+        "{verdict:?}"
+    );
+    assert!(started.elapsed().as_secs() < 1, "{:?}", started.elapsed());
+    // The largest work the cap lets through still returns within seconds in a debug build.
+    let fits = MAX_POINTS / 2_000; // points for 2 000 slaves, at most the cap in all
+    loads[0] = Load { t0: 2, ring: 3 };
+    for l in &mut loads[1..] {
+        *l = Load {
+            t0: fits,
+            ring: 3,
+        };
+    }
+    let started = std::time::Instant::now();
+    let verdict = check(&loads, link);
+    assert!(verdict.is_ok(), "{verdict:?}");
+    assert!(started.elapsed().as_secs() < 20, "{:?}", started.elapsed());
+}
