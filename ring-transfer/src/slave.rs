@@ -217,9 +217,10 @@ pub struct SlaveStats {
 /// first row boundary at which it has heard the master (any valid frame for it, a keep-alive
 /// too) since it went stand-alone and the ring covers the next row. Once the master answers
 /// again, with frames delayed by at most `d` steps each way and none lost, the slave is linked
-/// again within `retry_after + 2·d + row_len + 1` steps, for every configuration
-/// [`Slave::new`] accepts (its next report, the answer, the rest of the row), given a ring of at
-/// least `4·d` slots (a ring shorter than the link's round trip underruns, outage or not). The master's
+/// again within `retry_after + 4·d + row_len + 1` steps, for every configuration
+/// [`Slave::new`] accepts (its next report, the answer — twice, when the outage ate refills the
+/// master had counted as sent and the board must ask again for the gap — and the rest of the
+/// row), given a ring of at least `4·d` slots (a ring shorter than the link's round trip underruns, outage or not). The master's
 /// stream pauses meanwhile, so the rows around a fault are whole rows of one source or the
 /// other, never a mixture. The one exception: if the ring runs dry mid-row after the master has
 /// gone silent, the rest of that row comes from the local pattern ([`Source::Fallback`]) — there

@@ -140,19 +140,24 @@ impl<const N: usize> Run<N> {
         out.source
     }
 
-    /// Runs until the board has been linked (after having been stand-alone) or `limit` steps
-    /// passed; returns the step of the relink counted from now, if any.
+    /// Runs until the board has been linked after having been stand-alone (`went`: it already
+    /// was) or `limit` steps passed; returns the step of the relink counted from now, if any.
     fn until_linked(&mut self, limit: u64) -> Option<u64> {
+        self.relinked(limit, false).1
+    }
+
+    /// As [`until_linked`], also returning whether the board was stand-alone at all.
+    fn relinked(&mut self, limit: u64, went: bool) -> (bool, Option<u64>) {
         let start = self.now;
-        let mut went = self.slave.mode() == Mode::StandAlone;
+        let mut went = went || self.slave.mode() == Mode::StandAlone;
         while self.now - start < limit {
             self.tick();
             went |= self.slave.mode() == Mode::StandAlone;
             if went && self.slave.mode() == Mode::Linked {
-                return Some(self.now - 1 - start);
+                return (true, Some(self.now - 1 - start));
             }
         }
-        None
+        (went, None)
     }
 }
 
@@ -391,4 +396,107 @@ fn many_slaves_times_many_points_is_refused_promptly() {
     let verdict = check(&loads, link);
     assert!(verdict.is_ok(), "{verdict:?}");
     assert!(started.elapsed().as_secs() < 20, "{:?}", started.elapsed());
+}
+
+/// The attacker's relink sweep (outages that eat refills, every phase in a row): returns the
+/// worst `linked_at − (retry_after + row_len + 1)` per delay 0..=5 and the breaches of
+/// `retry_after + 4·d + row_len + 1`.
+fn relink_sweep<const N: usize>(
+    (rows, retries, silences): (&[u16], &[u32], &[u32]),
+    worst: &mut [u64; 6],
+    breaches: &mut Vec<String>,
+) {
+    for d in 0..=5u64 {
+        if (N as u64) < 4 * d {
+            continue;
+        }
+        for &row in rows {
+            for &retry in retries {
+                for &silence in silences {
+                    for phase in 0..(u64::from(row) + 3) {
+                        for len in [u64::from(silence) + 2 * u64::from(row) + 5, 61, 200] {
+                            let config = SlaveConfig {
+                                row_len: row,
+                                silence_limit: silence,
+                                retry_after: retry,
+                                ..CFG
+                            };
+                            let mut run: Run<N> = Run::new(config, d);
+                            for _ in 0..(200 + phase) {
+                                run.tick();
+                            }
+                            let end = run.now + len;
+                            run.outage = Some((run.now, end));
+                            let mut went = false;
+                            while run.now < end {
+                                run.tick();
+                                went |= run.slave.mode() == Mode::StandAlone;
+                            }
+                            let base = u64::from(retry) + u64::from(row) + 1;
+                            let bound = base + 4 * d;
+                            let linked = match run.relinked(bound + 200, went) {
+                                (false, _) => Some(0), // the ring bridged the outage
+                                (true, linked) => linked,
+                            };
+                            assert_eq!(run.wrong_items, 0);
+                            let ctx = format!(
+                                "N={N} d={d} row={row} retry={retry} silence={silence} phase={phase} len={len}"
+                            );
+                            match linked {
+                                Some(t) => {
+                                    worst[d as usize] = worst[d as usize].max(t.saturating_sub(base));
+                                    if t > bound {
+                                        breaches.push(format!("{ctx}: linked after {t} > {bound}"));
+                                    }
+                                }
+                                None => breaches.push(format!("{ctx}: never linked")),
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The attacker's full sweep (16 s in release): worst excess over `retry_after + row_len + 1`
+/// per delay 0..=5 measured [0, 1, 5, 9, 13, 14] — `4·d − 3` for d = 2..4 — and no breach of
+/// `retry_after + 4·d + row_len + 1`.
+#[test]
+#[ignore = "measurement: run in release with --ignored --nocapture"]
+fn relink_sweep_measure() {
+    let sets: (&[u16], &[u32], &[u32]) = (
+        &[1, 2, 3, 5, 7, 16],
+        &[1, 2, 3, 5, 9, 17, 40],
+        &[1, 2, 3, 5, 8, 13, 30],
+    );
+    let mut worst = [0u64; 6];
+    let mut breaches = Vec::new();
+    relink_sweep::<1>(sets, &mut worst, &mut breaches);
+    relink_sweep::<2>(sets, &mut worst, &mut breaches);
+    relink_sweep::<4>(sets, &mut worst, &mut breaches);
+    relink_sweep::<8>(sets, &mut worst, &mut breaches);
+    relink_sweep::<13>(sets, &mut worst, &mut breaches);
+    relink_sweep::<20>(sets, &mut worst, &mut breaches);
+    relink_sweep::<70>(sets, &mut worst, &mut breaches);
+    println!("worst excess over retry+row+1 per d: {worst:?}");
+    println!("{} breaches: {:#?}", breaches.len(), &breaches[..breaches.len().min(10)]);
+    assert!(breaches.is_empty());
+}
+
+/// README and `Slave` docs: once the master answers again the board is linked within
+/// `retry_after + 4·d + row_len + 1` steps, also when the outage ate refills the master had
+/// counted as sent (the board's first report is fresh, the master answers from `sent`, the
+/// board sees a gap and retries: a second round trip). A cheaper slice of the attacker's
+/// sweep (every phase in a row, three outage lengths, delays 0–5 with rings of 4·d slots and
+/// more), which reaches `4·d − 3` above `retry_after + row_len + 1`.
+#[test]
+fn relink_within_four_delays_when_the_outage_eats_refills() {
+    let sets: (&[u16], &[u32], &[u32]) = (&[1, 3, 7], &[1, 3, 9], &[1, 3, 8, 30]);
+    let mut worst = [0u64; 6];
+    let mut breaches = Vec::new();
+    relink_sweep::<4>(sets, &mut worst, &mut breaches);
+    relink_sweep::<20>(sets, &mut worst, &mut breaches);
+    assert!(breaches.is_empty(), "{} breaches: {:#?}", breaches.len(), &breaches[..breaches.len().min(10)]);
+    assert!(worst[4] > 8, "the second round trip is met: {worst:?}");
 }
