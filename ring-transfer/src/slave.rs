@@ -22,11 +22,19 @@ pub struct SlaveConfig {
     /// Steps a slave owed items waits without a refill before it reports again with the retry
     /// flag (≥ 1); also the period of its reports while stand-alone or saying hello.
     pub retry_after: u32,
-    /// The board's boot number: a value the firmware changes at every start (a counter kept in
-    /// flash or a backup register, or a random byte). The master tells a rebooted board by it
-    /// and ignores late reports of the board before the reboot; a board that starts with the
-    /// same number as before is still placed in the stream again, but a late report of its
-    /// previous start may then be taken for its own.
+    /// The board's boot number. **The firmware must give a number that differs from the
+    /// previous start's**, at every start: e.g. a counter kept in flash, EEPROM or battery-backed
+    /// RAM, read and incremented (and written back) before the first report, or a byte from a
+    /// hardware random-number generator (then two starts in a row match once in 256). Never a
+    /// constant. The master tells a rebooted board by it and ignores late frames of the board
+    /// before the reboot.
+    ///
+    /// If a board starts with the same number as the start before, the master cannot tell the
+    /// two starts apart: a late sync refill of the previous start can place the new board where
+    /// the previous start was placed, behind the master's stream, and the master then reads every
+    /// report of the board as an old one — the board runs stand-alone for good (until the
+    /// master's interface for it is re-initialised); a late report of the previous start can also
+    /// be taken for the new board's.
     pub boot: u8,
 }
 

@@ -15,8 +15,8 @@ use std::collections::VecDeque;
 
 use regler_ring_transfer::link::{self, Message, decode};
 use regler_ring_transfer::{
-    MAX_DRIFT, Master, Mode, Refill, Report, ReportOutcome, Slave, SlaveConfig,
-    SlaveConfigError, SlaveParams, Source,
+    MAX_DRIFT, Master, Mode, Refill, Report, ReportOutcome, Slave, SlaveConfig, SlaveConfigError,
+    SlaveParams, Source,
 };
 
 fn pat(i: u64) -> u8 {
@@ -203,8 +203,14 @@ fn configurations_that_could_drift_half_the_range_are_refused() {
             _ => Slave::<1000>::new(c).is_ok(),
         };
         assert!(ok(edge(fits, 100)), "sum {MAX_DRIFT} accepted, ring {n}");
-        assert!(!ok(edge(fits + 1, 100)), "sum {MAX_DRIFT} + 1 refused, ring {n}");
-        assert!(!ok(edge(fits, 101)), "sum {MAX_DRIFT} + 1 refused, ring {n}");
+        assert!(
+            !ok(edge(fits + 1, 100)),
+            "sum {MAX_DRIFT} + 1 refused, ring {n}"
+        );
+        assert!(
+            !ok(edge(fits, 101)),
+            "sum {MAX_DRIFT} + 1 refused, ring {n}"
+        );
     }
     let e = Slave::<8>::new(SlaveConfig {
         silence_limit: 50_000,
@@ -301,7 +307,11 @@ fn drift_stays_within_the_stated_bound() {
                             retry_after: 3,
                             ..CFG
                         };
-                        let outage = u64::from(silence_limit) + 4 * N as u64 + 3 * u64::from(row_len) + 8 * d + 10;
+                        let outage = u64::from(silence_limit)
+                            + 4 * N as u64
+                            + 3 * u64::from(row_len)
+                            + 8 * d
+                            + 10;
                         let drift = outage_relinks::<N>(config, d, col, outage);
                         let bound = (2 * d + u64::from(silence_limit) + 1).max(N as u64)
                             + u64::from(row_len)
@@ -387,10 +397,7 @@ fn many_slaves_times_many_points_is_refused_promptly() {
     let fits = MAX_POINTS / 2_000; // points for 2 000 slaves, at most the cap in all
     loads[0] = Load { t0: 2, ring: 3 };
     for l in &mut loads[1..] {
-        *l = Load {
-            t0: fits,
-            ring: 3,
-        };
+        *l = Load { t0: fits, ring: 3 };
     }
     let started = std::time::Instant::now();
     let verdict = check(&loads, link);
@@ -444,7 +451,8 @@ fn relink_sweep<const N: usize>(
                             );
                             match linked {
                                 Some(t) => {
-                                    worst[d as usize] = worst[d as usize].max(t.saturating_sub(base));
+                                    worst[d as usize] =
+                                        worst[d as usize].max(t.saturating_sub(base));
                                     if t > bound {
                                         breaches.push(format!("{ctx}: linked after {t} > {bound}"));
                                     }
@@ -480,7 +488,11 @@ fn relink_sweep_measure() {
     relink_sweep::<20>(sets, &mut worst, &mut breaches);
     relink_sweep::<70>(sets, &mut worst, &mut breaches);
     println!("worst excess over retry+row+1 per d: {worst:?}");
-    println!("{} breaches: {:#?}", breaches.len(), &breaches[..breaches.len().min(10)]);
+    println!(
+        "{} breaches: {:#?}",
+        breaches.len(),
+        &breaches[..breaches.len().min(10)]
+    );
     assert!(breaches.is_empty());
 }
 
@@ -497,6 +509,11 @@ fn relink_within_four_delays_when_the_outage_eats_refills() {
     let mut breaches = Vec::new();
     relink_sweep::<4>(sets, &mut worst, &mut breaches);
     relink_sweep::<20>(sets, &mut worst, &mut breaches);
-    assert!(breaches.is_empty(), "{} breaches: {:#?}", breaches.len(), &breaches[..breaches.len().min(10)]);
+    assert!(
+        breaches.is_empty(),
+        "{} breaches: {:#?}",
+        breaches.len(),
+        &breaches[..breaches.len().min(10)]
+    );
     assert!(worst[4] > 8, "the second round trip is met: {worst:?}");
 }
