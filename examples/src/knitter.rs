@@ -20,7 +20,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use regler_ring_transfer::capacity::{self, LinkSpec, Load, Verdict};
 use regler_ring_transfer::{
-    Master, Mode, Refill, Report, ReportOutcome, Slave, SlaveConfig, SlaveParams, Source, link,
+    MAX_DRIFT, Master, Mode, Refill, Report, ReportOutcome, Slave, SlaveConfig, SlaveParams,
+    Source, link,
 };
 use serde::Serialize;
 
@@ -62,6 +63,9 @@ pub struct Config {
     pub silence_needles: u32,
     /// Rows per job.
     pub job_rows: u32,
+    /// The machines' start count, as a board keeps it in flash and increments at every start:
+    /// each start's boot number differs from the one before (see [`boot_number`]).
+    pub start: u32,
 }
 
 impl Default for Config {
@@ -79,6 +83,7 @@ impl Default for Config {
             master_fault: None,
             silence_needles: 100,
             job_rows: 40,
+            start: 0,
         }
     }
 }
@@ -134,10 +139,16 @@ impl Config {
                 ));
             }
         }
-        if self.silence_needles == 0 || self.silence_needles > 100_000 {
+        // The slave refuses silence_limit + row_len + ring > MAX_DRIFT (an outage could move
+        // its 16-bit counters half their range past the master's).
+        let max_silence = MAX_DRIFT
+            .saturating_sub(u64::from(self.needles))
+            .saturating_sub(RING as u64);
+        if self.silence_needles == 0 || u64::from(self.silence_needles) > max_silence {
             return Err(format!(
-                "silence must be 1..=100000 needles, got {}",
-                self.silence_needles
+                "silence must be 1..={max_silence} needles (with {} needles and a {RING}-byte \
+                 ring), got {}",
+                self.needles, self.silence_needles
             ));
         }
         if self.job_rows == 0 {
@@ -206,6 +217,19 @@ pub struct Capacity {
     pub utilisation_percent: f64,
     /// How many machines at the fastest machine's speed this link could serve.
     pub max_machines_at_fastest: usize,
+}
+
+/// The boot number of machine `machine` at its start number `start` in the run seeded `seed`:
+/// a hash of seed and machine plus the start count, so two consecutive starts of a machine
+/// always differ (a board must never start with the previous start's number: a late sync of
+/// that start could place it behind the master's stream, ignored for good).
+#[must_use]
+pub fn boot_number(seed: u64, machine: usize, start: u32) -> u8 {
+    let mut x = seed ^ (machine as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^= x >> 31;
+    x.to_le_bytes()[0].wrapping_add(start.to_le_bytes()[0])
 }
 
 /// Colour (0–3) of needle `col` in row `row` of job `job`: four jacquard designs, so a shifted,
@@ -354,7 +378,7 @@ impl Board {
             row_len: config.needles,
             silence_limit: config.silence_needles,
             retry_after: 16,
-            boot: 1,
+            boot: boot_number(config.seed, index, config.start),
         })
         .map_err(|e| e.to_string())?;
         Ok(Self {

@@ -295,3 +295,51 @@ fn interactive_under_tmux_answers_each_key() {
     assert!(wait_for("pattern check: 0 wrong bytes"), "{}", screen());
     tmux(&["kill-session", "-t", &session]);
 }
+
+/// Every silence the knitter accepts is one its boards accept (the counters cannot drift half
+/// their range in an outage), and the largest is accepted: 32 767 − needles − 256.
+#[test]
+fn silence_is_capped_by_the_counter_drift() {
+    use regler_examples::knitter::{Board, Config, RING};
+    for needles in [8u16, 200, 1000] {
+        let max = 32_767 - u32::from(needles) - RING as u32;
+        for silence in [1, max, max + 1, 100_000] {
+            let config = Config {
+                needles,
+                silence_needles: silence,
+                ..Config::default()
+            };
+            let accepted = config.validate().is_ok();
+            assert_eq!(
+                accepted,
+                silence <= max,
+                "needles {needles} silence {silence}"
+            );
+            assert_eq!(
+                Board::new(0, 130, &config).is_ok(),
+                accepted,
+                "needles {needles} silence {silence}: the board agrees"
+            );
+        }
+    }
+    let out = knitter(&["--silence", "100000", "--no-picture"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("silence must be 1..=32311"));
+}
+
+/// Consecutive starts of a machine never share a boot number, for any seed and machine.
+#[test]
+fn consecutive_starts_get_different_boot_numbers() {
+    use regler_examples::knitter::boot_number;
+    for seed in [0u64, 1, 1981, u64::MAX] {
+        for machine in 0..100 {
+            for start in 0..600u32 {
+                assert_ne!(
+                    boot_number(seed, machine, start),
+                    boot_number(seed, machine, start + 1),
+                    "seed {seed} machine {machine} start {start}"
+                );
+            }
+        }
+    }
+}

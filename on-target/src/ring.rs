@@ -89,7 +89,7 @@ pub fn lossy_link_keeps_the_stream() -> Outcome {
     let config = SlaveConfig {
         address: 2,
         row_len: 8,
-        silence_limit: 100_000,
+        silence_limit: 30_000, // never silent in this run; with row 8 and ring 32 within MAX_DRIFT
         retry_after: 5,
         boot: 1,
     };

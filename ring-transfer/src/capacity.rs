@@ -128,10 +128,11 @@ pub enum CapacityError {
     UnknownSlave(usize),
     /// A deadline does not fit in 64 bits.
     Overflow,
-    /// More than [`MAX_POINTS`] deadline points to check (rates or rings many orders of
-    /// magnitude apart).
+    /// The test would evaluate the demand of every slave at more than [`MAX_POINTS`] deadline
+    /// points in all (points × slaves: rates or rings many orders of magnitude apart, or very
+    /// many slaves beside one fast one).
     TooComplex {
-        /// Points the test would need.
+        /// Deadline points × slaves the test would need (saturating).
         points: u64,
     },
 }
@@ -147,7 +148,7 @@ impl fmt::Display for CapacityError {
             Self::TooComplex { points } => {
                 write!(
                     f,
-                    "{points} deadline points to check (at most {MAX_POINTS})"
+                    "{points} deadline points x slaves to check (at most {MAX_POINTS})"
                 )
             }
         }
@@ -156,11 +157,14 @@ impl fmt::Display for CapacityError {
 
 impl core::error::Error for CapacityError {}
 
-/// The most deadline points one check examines; each costs O(n).
+/// The most work one [`check`] does: deadline points × slaves (each point sums the demand of
+/// every slave). A set that needs more is refused with [`CapacityError::TooComplex`] before any
+/// point is evaluated, so a check costs O(n) plus at most this many demand terms.
 pub const MAX_POINTS: u64 = 10_000_000;
 
-/// Whether `loads` can share `link`. Cost: O(n·P), P the deadline points below the largest
-/// deadline (none for identical slaves).
+/// Whether `loads` can share `link`. Cost: O(n + n·P), P the deadline points below the
+/// largest deadline (none for identical slaves), with n·P at most [`MAX_POINTS`] (a set that
+/// needs more is refused).
 ///
 /// # Errors
 /// [`CapacityError`] for an empty set, a zero rate or item time, an overflow, or too many
@@ -352,8 +356,10 @@ fn check_by(
         let periods = div_ceil(u128::from(d_max.saturating_sub(d)), u128::from(l.t0));
         points = points.saturating_add(u64::try_from(periods).unwrap_or(u64::MAX));
     }
-    if points > MAX_POINTS {
-        return Err(CapacityError::TooComplex { points });
+    // Each point sums the demand of all n slaves: the cap bounds that work, not the points.
+    let work = points.saturating_mul(u64::try_from(n).unwrap_or(u64::MAX));
+    if work > MAX_POINTS {
+        return Err(CapacityError::TooComplex { points: work });
     }
     let blocking = c.saturating_sub(1);
     for i in 0..n {

@@ -1,15 +1,21 @@
 //! An indexed binary min-heap of deadlines: the master's earliest-deadline-first choice in
 //! O(1), a deadline change in O(log n).
 
-/// Keys of `S` members (indices `0..S`); `u64::MAX` means "nothing owed" and sorts last.
+/// Keys of `S` members (indices `0..S`); `None` means "nothing owed" and sorts after every
+/// deadline, `u64::MAX` included (a deadline that saturated at the clock's end is still owed).
 /// Ties go to the lower index, so decisions are deterministic.
 #[derive(Debug, Clone)]
 pub(crate) struct Edf<const S: usize> {
-    keys: [u64; S],
+    keys: [Option<u64>; S],
     /// heap[k] = member at heap position k.
     heap: [u16; S],
     /// pos[m] = heap position of member m.
     pos: [u16; S],
+}
+
+/// A key's place in the order: every deadline before "nothing owed".
+fn order(key: Option<u64>) -> (bool, u64) {
+    key.map_or((true, 0), |k| (false, k))
 }
 
 impl<const S: usize> Edf<S> {
@@ -28,21 +34,21 @@ impl<const S: usize> Edf<S> {
             i += 1;
         }
         Self {
-            keys: [u64::MAX; S],
+            keys: [None; S],
             heap,
             pos: heap,
         }
     }
 
-    /// The member with the earliest key, and the key; `None` if every key is `u64::MAX`.
+    /// The member with the earliest key, and the key; `None` if no member has a key.
     pub(crate) fn earliest(&self) -> Option<(usize, u64)> {
         let member = usize::from(*self.heap.first()?);
-        let key = *self.keys.get(member)?;
-        (key != u64::MAX).then_some((member, key))
+        let key = (*self.keys.get(member)?)?;
+        Some((member, key))
     }
 
     /// Sets a member's key and restores the heap order. Unknown members are ignored.
-    pub(crate) fn set(&mut self, member: usize, key: u64) {
+    pub(crate) fn set(&mut self, member: usize, key: Option<u64>) {
         let Some(old) = self.keys.get_mut(member) else {
             return;
         };
@@ -51,9 +57,9 @@ impl<const S: usize> Edf<S> {
             return;
         };
         let at = usize::from(at);
-        if key < previous {
+        if order(key) < order(previous) {
             self.sift_up(at);
-        } else if key > previous {
+        } else if order(key) > order(previous) {
             self.sift_down(at);
         }
     }
@@ -63,8 +69,8 @@ impl<const S: usize> Edf<S> {
         let (Some(&ma), Some(&mb)) = (self.heap.get(a), self.heap.get(b)) else {
             return false;
         };
-        let ka = self.keys.get(usize::from(ma)).copied().unwrap_or(u64::MAX);
-        let kb = self.keys.get(usize::from(mb)).copied().unwrap_or(u64::MAX);
+        let ka = order(self.keys.get(usize::from(ma)).copied().flatten());
+        let kb = order(self.keys.get(usize::from(mb)).copied().flatten());
         (ka, ma) < (kb, mb)
     }
 
@@ -125,17 +131,20 @@ mod tests {
         /// After any sequence of key changes the heap names the member a linear scan names.
         #[test]
         fn earliest_matches_a_linear_scan(
-            changes in proptest::collection::vec((0usize..12, prop_oneof![Just(u64::MAX), 0u64..50]), 0..200)
+            changes in proptest::collection::vec(
+                (0usize..12, prop_oneof![Just(None), Just(Some(u64::MAX)), Just(Some(u64::MAX - 1)), (0u64..50).prop_map(Some)]),
+                0..200,
+            )
         ) {
             let mut edf: Edf<12> = Edf::new();
-            let mut model = [u64::MAX; 12];
+            let mut model: [Option<u64>; 12] = [None; 12];
             for (member, key) in changes {
                 edf.set(member, key);
                 model[member] = key;
                 let expected = (0..12)
-                    .filter(|&m| model[m] != u64::MAX)
-                    .min_by_key(|&m| (model[m], m))
-                    .map(|m| (m, model[m]));
+                    .filter_map(|m| model[m].map(|k| (k, m)))
+                    .min()
+                    .map(|(k, m)| (m, k));
                 prop_assert_eq!(edf.earliest(), expected);
             }
         }
@@ -145,10 +154,10 @@ mod tests {
     fn empty_and_unknown_members() {
         let mut edf: Edf<3> = Edf::new();
         assert_eq!(edf.earliest(), None);
-        edf.set(7, 1);
+        edf.set(7, Some(1));
         assert_eq!(edf.earliest(), None);
         let mut none: Edf<0> = Edf::new();
-        none.set(0, 1);
+        none.set(0, Some(1));
         assert_eq!(none.earliest(), None);
     }
 }

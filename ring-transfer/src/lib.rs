@@ -23,6 +23,6 @@ pub use link::{Message, Refill, Report, decode};
 pub use master::{Grant, Master, MasterError, ReportOutcome, SlaveParams, SlaveStatus};
 pub use ring::{Counters, Ring, Stats};
 pub use slave::{
-    FrameError, Mode, Output, Slave, SlaveConfig, SlaveConfigError, SlaveStats, Source,
+    FrameError, MAX_DRIFT, Mode, Output, Slave, SlaveConfig, SlaveConfigError, SlaveStats, Source,
 };
 pub use split::{Drainer, Filler, SharedRing};

@@ -291,7 +291,7 @@ impl<const S: usize> Master<S> {
             params: Some(params),
             ..Link::DETACHED
         };
-        self.edf.set(slave, u64::MAX);
+        self.edf.set(slave, None);
         Ok(())
     }
 
@@ -305,7 +305,7 @@ impl<const S: usize> Master<S> {
             .get_mut(slave)
             .ok_or(MasterError::UnknownSlave(slave))?;
         *link = Link::DETACHED;
-        self.edf.set(slave, u64::MAX);
+        self.edf.set(slave, None);
         Ok(())
     }
 
@@ -426,7 +426,7 @@ impl<const S: usize> Master<S> {
         let deadline = link.deadline();
         link.status.owed = link.owed();
         link.status.deadline = deadline;
-        self.edf.set(slave, deadline.unwrap_or(u64::MAX));
+        self.edf.set(slave, deadline);
     }
 
     /// The scheduler's decision at `now`: the slave with the earliest deadline that is owed

@@ -13,19 +13,45 @@ pub struct SlaveConfig {
     /// The slave's address on the link.
     pub address: u8,
     /// Items per row of the pattern (≥ 1): the slave changes source only at a row boundary.
+    /// With `silence_limit` and the ring's `N`, at most [`MAX_DRIFT`] (see there).
     pub row_len: u16,
-    /// Steps without a frame from the master after which it counts as silent (≥ 1).
+    /// Steps without a frame from the master after which it counts as silent (≥ 1). Every step
+    /// of an outage before that is an underrun that moves the board's counters on, so
+    /// `silence_limit + row_len + N` must be at most [`MAX_DRIFT`] (32 767).
     pub silence_limit: u32,
     /// Steps a slave owed items waits without a refill before it reports again with the retry
     /// flag (≥ 1); also the period of its reports while stand-alone or saying hello.
     pub retry_after: u32,
-    /// The board's boot number: a value the firmware changes at every start (a counter kept in
-    /// flash or a backup register, or a random byte). The master tells a rebooted board by it
-    /// and ignores late reports of the board before the reboot; a board that starts with the
-    /// same number as before is still placed in the stream again, but a late report of its
-    /// previous start may then be taken for its own.
+    /// The board's boot number. **The firmware must give a number that differs from the
+    /// previous start's**, at every start: e.g. a counter kept in flash, EEPROM or battery-backed
+    /// RAM, read and incremented (and written back) before the first report, or a byte from a
+    /// hardware random-number generator (then two starts in a row match once in 256). Never a
+    /// constant. The master tells a rebooted board by it and ignores late frames of the board
+    /// before the reboot.
+    ///
+    /// If a board starts with the same number as the start before, the master cannot tell the
+    /// two starts apart: a late sync refill of the previous start can place the new board where
+    /// the previous start was placed, behind the master's stream, and the master then reads every
+    /// report of the board as an old one — the board runs stand-alone for good (until the
+    /// master's interface for it is re-initialised); a late report of the previous start can also
+    /// be taken for the new board's.
     pub boot: u8,
 }
+
+/// The most `silence_limit + row_len + N` a [`Slave`] accepts: 32 767, the largest count the
+/// master's 16-bit counter extension reads as "ahead".
+///
+/// While no report of the board reaches the master (a link outage), the board's `consumed`
+/// count moves at most `max(2·d + silence_limit + 1, N) + row_len − 1` past the newest report
+/// the master holds, for a master that grants the board at most `N` items ahead and a link whose
+/// round trip (a report out, the master's answer back) takes at most `2·d` steps: `2·d` steps
+/// until the master's last answer arrives, `silence_limit + 1` steps of underruns before the
+/// master counts as silent (or up to the `N` items the master had granted, taken from the
+/// ring), and the rest of the row cut short (`row_len − 1` [`Source::Fallback`] items); then the
+/// board is stand-alone and its count stands still. With `silence_limit + row_len + N ≤ 32 767`
+/// and a ring of at least `4·d` slots (the relink bound's condition) that is at most 32 767, so
+/// the master takes the board's first report after any outage, however long.
+pub const MAX_DRIFT: u64 = 0x7FFF;
 
 /// Why a [`SlaveConfig`] was refused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -38,6 +64,18 @@ pub enum SlaveConfigError {
     ZeroSilenceLimit,
     /// `retry_after` = 0: every step would be a retry.
     ZeroRetry,
+    /// `silence_limit + row_len + N` exceeds [`MAX_DRIFT`]: during an outage the board's
+    /// 16-bit `consumed` count could run half its range or more past the newest report the
+    /// master holds, and the master would take every later report for an old one (the board
+    /// would stay stand-alone for good). The fields: `silence_limit`, `row_len`, `N`.
+    Drift {
+        /// `silence_limit` as given.
+        silence_limit: u32,
+        /// `row_len` as given.
+        row_len: u16,
+        /// The ring's slots.
+        capacity: usize,
+    },
     /// The ring has 0 slots or more than 32 767 (the 16-bit counters need half their range).
     Capacity(usize),
 }
@@ -49,6 +87,15 @@ impl fmt::Display for SlaveConfigError {
             Self::ZeroSilenceLimit => write!(f, "silence_limit must be at least 1 step"),
             Self::ZeroRetry => write!(f, "retry_after must be at least 1 step"),
             Self::Capacity(n) => write!(f, "ring must have 1..=32767 slots, got {n}"),
+            Self::Drift {
+                silence_limit,
+                row_len,
+                capacity,
+            } => write!(
+                f,
+                "silence_limit + row_len + ring slots must be at most {MAX_DRIFT}, got \
+                 {silence_limit} + {row_len} + {capacity}"
+            ),
         }
     }
 }
@@ -178,9 +225,10 @@ pub struct SlaveStats {
 /// first row boundary at which it has heard the master (any valid frame for it, a keep-alive
 /// too) since it went stand-alone and the ring covers the next row. Once the master answers
 /// again, with frames delayed by at most `d` steps each way and none lost, the slave is linked
-/// again within `retry_after + 2·d + row_len + 1` steps, for every configuration
-/// [`Slave::new`] accepts (its next report, the answer, the rest of the row), given a ring of at
-/// least `4·d` slots (a ring shorter than the link's round trip underruns, outage or not). The master's
+/// again within `retry_after + 4·d + row_len + 1` steps, for every configuration
+/// [`Slave::new`] accepts (its next report, the answer — twice, when the outage ate refills the
+/// master had counted as sent and the board must ask again for the gap — and the rest of the
+/// row), given a ring of at least `4·d` slots (a ring shorter than the link's round trip underruns, outage or not). The master's
 /// stream pauses meanwhile, so the rows around a fault are whole rows of one source or the
 /// other, never a mixture. The one exception: if the ring runs dry mid-row after the master has
 /// gone silent, the rest of that row comes from the local pattern ([`Source::Fallback`]) — there
@@ -254,6 +302,17 @@ impl<const N: usize> Slave<N> {
         }
         if N == 0 || N > 0x7FFF {
             return Err(SlaveConfigError::Capacity(N));
+        }
+        #[allow(clippy::cast_possible_truncation, reason = "N <= 0x7FFF was checked")]
+        let sum = (config.silence_limit as u64)
+            .saturating_add(config.row_len as u64)
+            .saturating_add(N as u64);
+        if sum > MAX_DRIFT {
+            return Err(SlaveConfigError::Drift {
+                silence_limit: config.silence_limit,
+                row_len: config.row_len,
+                capacity: N,
+            });
         }
         Ok(Self {
             config,

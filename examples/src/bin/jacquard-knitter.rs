@@ -54,9 +54,14 @@ struct Args {
     /// The master falls silent at START for SECONDS: `START:SECONDS`.
     #[arg(long, value_parser = parse_fault)]
     master_fault: Option<(f64, f64)>,
-    /// Needles without a word from the master before a board runs stand-alone.
+    /// Needles without a word from the master before a board runs stand-alone (at most
+    /// 32 767 − needles − 256: the board's counters must not drift half their range).
     #[arg(long, default_value_t = 100)]
     silence: u32,
+    /// The machines' start count (a board keeps it in flash and increments it at every start):
+    /// each start gets a boot number different from the one before.
+    #[arg(long, default_value_t = 0)]
+    start: u32,
     /// Rows per job.
     #[arg(long, default_value_t = 40)]
     job_rows: u32,
@@ -116,6 +121,7 @@ fn run(args: &Args) -> Result<(), String> {
         master_fault: args.master_fault,
         silence_needles: args.silence,
         job_rows: args.job_rows,
+        start: args.start,
     };
     config.validate()?;
     if args.picture_rows == 0 || args.picture_rows > 100_000 {
