@@ -195,6 +195,22 @@ impl fmt::Display for EncodeError {
 
 impl core::error::Error for EncodeError {}
 
+/// `true` when boot number `candidate` is a **later start** than `than`: it lies 1 to 127
+/// ahead of it, wrapping (so 0 is later than 255). A board's boot number increases by one at
+/// every start, so a start is later than the 127 before it; `than` itself and the 128 numbers
+/// behind it are not later.
+///
+/// ```
+/// use regler_ring_transfer::link::newer_boot;
+/// assert!(newer_boot(6, 5) && newer_boot(0, 255) && newer_boot(132, 5));
+/// assert!(!newer_boot(5, 5) && !newer_boot(4, 5) && !newer_boot(133, 5));
+/// ```
+#[must_use]
+pub const fn newer_boot(candidate: u8, than: u8) -> bool {
+    let ahead = candidate.wrapping_sub(than);
+    ahead != 0 && ahead < 0x80
+}
+
 /// CRC-16/CCITT-FALSE (polynomial 0x1021, initial value 0xFFFF, no reflection).
 #[must_use]
 pub fn crc16(bytes: &[u8]) -> u16 {
