@@ -145,8 +145,9 @@ pub struct SlaveStatus {
     pub received: u64,
     /// Stream items granted (the next index to send).
     pub sent: u64,
-    /// Hellos with a boot number other than the session's: the board restarted (a power
-    /// cycle, a watchdog) and was placed again where the board before it stopped.
+    /// Hellos of a later start than the session's ([`newer_boot`]): the board restarted (a
+    /// power cycle, a watchdog) and was placed again where the board before it stopped. A late
+    /// hello of an earlier start is not counted.
     pub reboots: u32,
     /// The current session's boot number.
     pub boot: u8,
