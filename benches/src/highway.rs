@@ -38,7 +38,7 @@ pub fn workload() -> Vec<Message> {
                 },
                 _ => Message::Demand {
                     crate_address,
-                    sgl: (x >> 20) as u8 % 32,
+                    sgl: 1 + (x >> 20) as u8 % 31, // SGL 0 is no demand
                 },
             }
         })

@@ -12,20 +12,25 @@
 //!   an item only if its index is the next one it expects, so an item that arrives twice is not
 //!   consumed twice and one that arrives early (after a loss) is not taken out of order.
 //!
-//! **Sessions.** Every report carries the board's **boot number** (a value its firmware changes
-//! at every start). A board that has just started has no place in the stream: its reports carry
-//! the **hello** flag, and the master answers with refills flagged **sync** that carry the same
-//! boot number and start where the previous board stopped; the board takes its counters from
-//! the first such refill. A report whose boot number is not the current session's is ignored, so
-//! a late or repeated report of the board before a reboot is never taken for the new board; a
-//! sync refill for another boot number is never taken by the new board.
+//! **Sessions.** Every report carries the board's **boot number** (its firmware adds 1 at every
+//! start; [`newer_boot`] orders them, wrapping). A board that has just started has no place in
+//! the stream: its reports carry the **hello** flag, and the master answers with refills flagged
+//! **sync** that carry the same boot number and start where the previous board stopped; the
+//! board takes its counters from the first such refill that has items. A report whose boot
+//! number is not the current session's is ignored, and so is a hello of an earlier start, so a
+//! late or repeated frame of the board before a reboot never moves the new board's session; a
+//! sync refill for another boot number is never taken by the new board. The master answers a
+//! report it ignored for its boot number with a **session offer** — a sync refill of no items
+//! carrying the session's boot number — and a placed board that gets one for another start says
+//! hello again (taking the number after the offered one if that is a later start than its own),
+//! so a board is never ignored for good.
 //!
 //! Frames (all integers little-endian, CRC-16/CCITT-FALSE over everything before it):
 //!
 //! | frame | bytes |
 //! |---|---|
 //! | report | `0xA5`, slave, consumed (2), received (2), flags, boot, CRC (2) — 10 bytes; flags bit 0 = stand-alone, bit 1 = retry, bit 2 = hello, others 0 |
-//! | refill | `0x5A`, slave, first index (2), flags, boot, count n (0..=[`MAX_REFILL`]), n items, CRC (2) — 9 + n bytes; flags bit 0 = sync, others 0; n = 0 is a keep-alive |
+//! | refill | `0x5A`, slave, first index (2), flags, boot, count n (0..=[`MAX_REFILL`]), n items, CRC (2) — 9 + n bytes; flags bit 0 = sync, others 0; n = 0 is a keep-alive, or with sync a session offer |
 //!
 //! The CRC detects every error of up to 3 bits in a frame of this size and every burst of up to
 //! 16 bits.
@@ -194,6 +199,22 @@ impl fmt::Display for EncodeError {
 }
 
 impl core::error::Error for EncodeError {}
+
+/// `true` when boot number `candidate` is a **later start** than `than`: it lies 1 to 127
+/// ahead of it, wrapping (so 0 is later than 255). A board's boot number increases by one at
+/// every start, so a start is later than the 127 before it; `than` itself and the 128 numbers
+/// behind it are not later.
+///
+/// ```
+/// use regler_ring_transfer::link::newer_boot;
+/// assert!(newer_boot(6, 5) && newer_boot(0, 255) && newer_boot(132, 5));
+/// assert!(!newer_boot(5, 5) && !newer_boot(4, 5) && !newer_boot(133, 5));
+/// ```
+#[must_use]
+pub const fn newer_boot(candidate: u8, than: u8) -> bool {
+    let ahead = candidate.wrapping_sub(than);
+    ahead != 0 && ahead < 0x80
+}
 
 /// CRC-16/CCITT-FALSE (polynomial 0x1021, initial value 0xFFFF, no reflection).
 #[must_use]

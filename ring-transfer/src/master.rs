@@ -3,7 +3,7 @@
 use core::fmt;
 
 use crate::edf::Edf;
-use crate::link::{Refill, Report};
+use crate::link::{Refill, Report, newer_boot};
 
 /// What the master must know of a slave: its ring size and how fast it consumes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -56,7 +56,9 @@ pub enum ReportOutcome {
         owed: u32,
     },
     /// Older than, or the same as, a report already seen (a late or repeated message), or a
-    /// report of another boot than the current session's (the board before a reboot): ignored.
+    /// report of another boot than the current session's, or a hello of an earlier start (the
+    /// board before a reboot): ignored. A report ignored for its boot number is answered by a
+    /// session offer from [`Master::next_refill`].
     /// A stand-alone report of the current session is stale only if it is older than the
     /// newest: the same counters again ask for a keep-alive and are accepted.
     Stale,
@@ -71,7 +73,10 @@ pub struct Grant {
     /// Stream index (64-bit, never wraps in practice) of the first item; the frame carries its
     /// low 16 bits ([`Grant::first_wire`]).
     pub first: u64,
-    /// Items to send (≥ 1).
+    /// Items to send: at least 1, except in a **session offer** (0 items, [`Grant::sync`] set,
+    /// [`Grant::boot`] the session's): the answer to a report of another boot than the
+    /// session's, telling that board which start the master serves (it then says hello, see
+    /// [`Master::on_report`]). Send it like any grant: [`Grant::refill`] with no items.
     pub count: u32,
     /// The deadline this grant served (the source's `slack · t0` after the slave's report).
     pub deadline: u64,
@@ -84,7 +89,8 @@ pub struct Grant {
     /// The board has said hello, has not yet reported from its new place, and this grant
     /// starts where the session starts: the refill must be sent as a sync refill, which places
     /// the board at `first`. (If it is lost, the board says hello again and the master starts
-    /// the session again from the same place.)
+    /// the session again from the same place.) Also set on a session offer (no items), which
+    /// never places a board.
     pub sync: bool,
 }
 
@@ -129,7 +135,7 @@ pub struct SlaveStatus {
     pub standalone: bool,
     /// Reports accepted.
     pub reports: u32,
-    /// Reports ignored as late or repeated.
+    /// Reports ignored as late or repeated, or as another start's than the session's.
     pub stale_reports: u32,
     /// Retry reports (the slave waited too long or saw a gap): the master sent again.
     pub retries: u32,
@@ -139,8 +145,9 @@ pub struct SlaveStatus {
     pub received: u64,
     /// Stream items granted (the next index to send).
     pub sent: u64,
-    /// Hellos with a boot number other than the session's: the board restarted (a power
-    /// cycle, a watchdog) and was placed again where the board before it stopped.
+    /// Hellos of a later start than the session's ([`newer_boot`]): the board restarted (a
+    /// power cycle, a watchdog) and was placed again where the board before it stopped. A late
+    /// hello of an earlier start is not counted.
     pub reboots: u32,
     /// The current session's boot number.
     pub boot: u8,
@@ -157,6 +164,9 @@ struct Link {
     heard: bool,
     /// The board said hello and has not reported from its place yet: grants are sync grants.
     syncing: bool,
+    /// A report of another boot than the session's arrived at this time and has not been
+    /// answered yet: the next grant is a session offer.
+    offer: Option<u64>,
 }
 
 impl Link {
@@ -182,6 +192,7 @@ impl Link {
         first_consumed: 0,
         heard: false,
         syncing: false,
+        offer: None,
     };
 
     fn owed(&self) -> u32 {
@@ -341,7 +352,21 @@ impl<const S: usize> Master<S> {
     /// is skipped; repeated are only the items that board consumed after its newest report that
     /// reached the master. Grants are then [`Grant::sync`] until the board reports from its new
     /// place (only the one that starts at the session's first index is a sync grant); a hello
-    /// with a new boot number counts in [`SlaveStatus::reboots`].
+    /// of a later start counts in [`SlaveStatus::reboots`]. A hello of the session's own boot
+    /// number (repeated, or the board's answer to an offer) starts the session again at the
+    /// newest `consumed` count; a placed board takes only the items it has not yet received.
+    ///
+    /// **Boot numbers are ordered** ([`newer_boot`](crate::link::newer_boot)): a hello of an
+    /// earlier start than the session's — a late or repeated frame of a board that has since
+    /// restarted — is ignored like any report of another boot, so no frame of an earlier start
+    /// ever moves the session or is counted as a reboot. Every report ignored for its boot
+    /// number is answered: the next [`next_refill`](Self::next_refill) for this slave is a
+    /// **session offer** (a sync refill of no items with the session's boot number). A live
+    /// board that gets one says hello again (and, if the offer names a later start than its
+    /// own, takes the number after it), so a board the master does not serve — because the
+    /// master took an earlier start for the session after [`reinit`](Self::reinit), or the
+    /// board's boot number went back — is placed again within two round trips of its next
+    /// report.
     ///
     /// # Errors
     /// [`MasterError::UnknownSlave`] or [`MasterError::NotAttached`].
@@ -357,8 +382,20 @@ impl<const S: usize> Master<S> {
             .get_mut(slave)
             .ok_or(MasterError::UnknownSlave(slave))?;
         let status = &mut link.status;
+        let other_boot = link.heard && report.boot != status.boot;
+        if other_boot && !(report.hello && newer_boot(report.boot, status.boot)) {
+            // A report of another start than the session's, or a hello of an earlier start (a
+            // late or repeated frame of a board that has since restarted): ignored, so it never
+            // moves the session. Its sender learns which start the master serves: if it is a
+            // live board (the master took an earlier start for the session, or the board's
+            // boot number went back), it says hello again.
+            status.stale_reports = status.stale_reports.saturating_add(1);
+            link.offer = Some(now);
+            self.refresh(slave);
+            return Ok(ReportOutcome::Stale);
+        }
         if report.hello {
-            if link.heard && report.boot != status.boot {
+            if other_boot {
                 status.reboots = status.reboots.saturating_add(1);
             }
             link.heard = true;
@@ -374,10 +411,6 @@ impl<const S: usize> Master<S> {
             let owed = link.owed();
             self.refresh(slave);
             return Ok(ReportOutcome::Accepted { owed });
-        }
-        if link.heard && report.boot != status.boot {
-            status.stale_reports = status.stale_reports.saturating_add(1);
-            return Ok(ReportOutcome::Stale);
         }
         if link.heard {
             let (Some(consumed), Some(received)) = (
@@ -426,7 +459,11 @@ impl<const S: usize> Master<S> {
         let deadline = link.deadline();
         link.status.owed = link.owed();
         link.status.deadline = deadline;
-        self.edf.set(slave, deadline);
+        let key = match (deadline, link.offer) {
+            (None, None) => None,
+            (deadline, offer) => Some(deadline.unwrap_or(u64::MAX).min(offer.unwrap_or(u64::MAX))),
+        };
+        self.edf.set(slave, key);
     }
 
     /// The scheduler's decision at `now`: the slave with the earliest deadline that is owed
@@ -436,6 +473,19 @@ impl<const S: usize> Master<S> {
     pub fn next_refill(&mut self, now: u64, max: u32) -> Option<Grant> {
         let (slave, deadline) = self.edf.earliest()?;
         let link = self.links.get_mut(slave)?;
+        if link.offer.take().is_some() {
+            let grant = Grant {
+                slave,
+                first: link.status.sent,
+                count: 0,
+                deadline,
+                late: false,
+                boot: link.status.boot,
+                sync: true,
+            };
+            self.refresh(slave);
+            return Some(grant);
+        }
         let count = link.owed().min(max.max(1));
         if count == 0 {
             return None;
@@ -723,5 +773,91 @@ mod tests {
         let s = m.status(0).unwrap();
         assert!(s.linked);
         assert_eq!(s.consumed, 40_001);
+    }
+
+    /// Every pair (session boot, hello boot): a hello of a later start (1..=127 ahead, wrapping)
+    /// starts a session and counts a reboot; the session's own starts it again without
+    /// counting; any other (an earlier start) is ignored, moves nothing and is answered by one
+    /// session offer (no items, sync, the session's boot) before any grant.
+    #[test]
+    fn hellos_of_earlier_starts_are_ignored_and_answered_with_an_offer() {
+        for session in 0..=255u8 {
+            for boot in 0..=255u8 {
+                let mut m: Master<1> = Master::new();
+                m.attach(0, SlaveParams { capacity: 8, t0: 1 }).unwrap();
+                let running = Report {
+                    boot: session,
+                    ..report(1_000, 1_000)
+                };
+                m.on_report(0, 0, &running).unwrap();
+                while m.next_refill(0, 64).is_some() {}
+                m.on_report(
+                    1,
+                    0,
+                    &Report {
+                        boot: session,
+                        ..report(1_004, 1_008)
+                    },
+                )
+                .unwrap();
+                let hello = Report {
+                    boot,
+                    hello: true,
+                    standalone: true,
+                    ..report(0, 0)
+                };
+                let outcome = m.on_report(2, 0, &hello).unwrap();
+                let s = m.status(0).unwrap();
+                let ahead = boot.wrapping_sub(session);
+                let g = m.next_refill(2, 64).unwrap();
+                if ahead == 0 || ahead < 128 {
+                    assert_eq!(outcome, ReportOutcome::Accepted { owed: 8 });
+                    assert_eq!((s.boot, s.reboots), (boot, u32::from(ahead != 0)));
+                    assert_eq!((g.first, g.count, g.sync, g.boot), (1_004, 8, true, boot));
+                } else {
+                    assert_eq!(outcome, ReportOutcome::Stale, "{session} {boot}");
+                    assert_eq!(
+                        (s.boot, s.reboots, s.consumed, s.sent),
+                        (session, 0, 1_004, 1_008)
+                    );
+                    assert_eq!((g.count, g.sync, g.boot, g.late), (0, true, session, false));
+                    let g = m.next_refill(2, 64).unwrap();
+                    assert_eq!((g.first, g.count, g.sync), (1_008, 4, false));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_report_of_another_boot_is_answered_with_an_offer() {
+        let mut m: Master<1> = Master::new();
+        m.attach(0, SlaveParams { capacity: 4, t0: 1 }).unwrap();
+        m.on_report(
+            0,
+            0,
+            &Report {
+                boot: 5,
+                ..report(0, 0)
+            },
+        )
+        .unwrap();
+        while m.next_refill(0, 64).is_some() {}
+        for boot in [4, 6, 200] {
+            assert_eq!(
+                m.on_report(
+                    1,
+                    0,
+                    &Report {
+                        boot,
+                        ..report(2, 4)
+                    }
+                ),
+                Ok(ReportOutcome::Stale)
+            );
+            let g = m.next_refill(1, 64).unwrap();
+            assert_eq!((g.count, g.sync, g.boot), (0, true, 5));
+            assert_eq!(m.next_refill(1, 64), None, "one offer per report");
+        }
+        assert_eq!(m.status(0).unwrap().stale_reports, 3);
     }
 }

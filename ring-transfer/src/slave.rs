@@ -2,7 +2,7 @@
 
 use core::fmt;
 
-use crate::link::{DecodeError, Message, Report, decode};
+use crate::link::{DecodeError, Message, Report, decode, newer_boot};
 use crate::ring::Ring;
 
 /// How a slave is set up.
@@ -22,19 +22,15 @@ pub struct SlaveConfig {
     /// Steps a slave owed items waits without a refill before it reports again with the retry
     /// flag (≥ 1); also the period of its reports while stand-alone or saying hello.
     pub retry_after: u32,
-    /// The board's boot number. **The firmware must give a number that differs from the
-    /// previous start's**, at every start: e.g. a counter kept in flash, EEPROM or battery-backed
-    /// RAM, read and incremented (and written back) before the first report, or a byte from a
-    /// hardware random-number generator (then two starts in a row match once in 256). Never a
-    /// constant. The master tells a rebooted board by it and ignores late frames of the board
-    /// before the reboot.
-    ///
-    /// If a board starts with the same number as the start before, the master cannot tell the
-    /// two starts apart: a late sync refill of the previous start can place the new board where
-    /// the previous start was placed, behind the master's stream, and the master then reads every
-    /// report of the board as an old one — the board runs stand-alone for good (until the
-    /// master's interface for it is re-initialised); a late report of the previous start can also
-    /// be taken for the new board's.
+    /// The board's boot number: the firmware adds 1 at every start (a counter kept in flash or
+    /// a backup register, wrapping). The master tells a rebooted board by it and ignores every
+    /// report and hello of an earlier start ([`newer_boot`](crate::link::newer_boot): the 128
+    /// numbers behind the session's), so no late frame of the board before a reboot moves the
+    /// new board's session. A board whose number went back or jumped (a lost counter, a random
+    /// byte) is still placed again: the master names its session's number and the board takes
+    /// the next one ([`Slave::boot`]), one round trip later; but until then a late frame of an
+    /// earlier start may be taken for the current one. A board that starts with the same number
+    /// as before is placed again too, with the same caveat.
     pub boot: u8,
 }
 
@@ -216,8 +212,9 @@ pub struct SlaveStats {
 /// sync refill for its boot number arrives, whose first index becomes its counters. The master
 /// answers a hello where the board before it stopped (see [`Master`](crate::Master)), so a
 /// board that was power-cycled resumes the stream there. A slave that receives a sync refill
-/// for another boot number (the master took a late hello of an earlier start for the current
-/// one) says hello again, keeping its ring and counters.
+/// for another boot number (a session offer: the master serves another start of this board)
+/// says hello again, keeping its ring and counters; if that number is a later start than its
+/// own, it first takes the number after it ([`Slave::boot`]).
 ///
 /// **Stand-alone and back.** At a row boundary, a linked slave whose master is silent and whose
 /// ring cannot cover the next row switches to its local pattern (`min(row_len, N)` items cover a
@@ -281,6 +278,9 @@ pub struct Slave<const N: usize> {
     hello_sent: bool,
     /// A valid frame for this slave arrived since it last went stand-alone.
     heard: bool,
+    /// The boot number in its reports: `config.boot`, or the one after the master's session
+    /// if the master named a later start.
+    boot: u8,
     stats: SlaveStats,
 }
 
@@ -331,6 +331,7 @@ impl<const N: usize> Slave<N> {
             synced: false,
             hello_sent: false,
             heard: false,
+            boot: config.boot,
             stats: SlaveStats {
                 underruns: 0,
                 fallbacks: 0,
@@ -351,7 +352,9 @@ impl<const N: usize> Slave<N> {
     /// frame for this slave — a keep-alive too — tells it the master is there.
     ///
     /// Before a sync refill for this slave's boot number has placed it in the stream, only
-    /// such a refill is taken; a sync refill for another boot number makes it say hello again.
+    /// such a refill (with items) is taken; a sync refill for another boot number makes a slave
+    /// the master had synced say hello again, and one of a later start
+    /// ([`newer_boot`](crate::link::newer_boot)) makes it take the boot number after that one.
     ///
     /// Items are taken only in stream order: one whose index is behind the next expected is a
     /// duplicate and dropped; one beyond it means something was lost — it and the rest of the
@@ -375,18 +378,28 @@ impl<const N: usize> Slave<N> {
         self.silent = 0;
         self.heard = true;
         if refill.sync {
-            if refill.boot == self.config.boot {
-                if !self.placed {
+            if refill.boot == self.boot {
+                // A session offer (no items) never places a board: only the sync grant that
+                // starts the session does.
+                if !self.placed && !refill.items.is_empty() {
                     self.placed = true;
                     self.consumed = refill.first;
                     self.received = refill.first;
                     self.reported = None;
                 }
-                self.synced = true;
-            } else if self.synced {
-                // The master serves another start of this board: say hello again.
-                self.synced = false;
-                self.hello_sent = false;
+                self.synced = self.placed;
+            } else {
+                if newer_boot(refill.boot, self.boot) {
+                    // The master serves a later start than this one: this board's boot number
+                    // went back (a counter lost, a random byte). Take the next one after it.
+                    self.boot = refill.boot.wrapping_add(1);
+                    self.hello_sent = false;
+                }
+                if self.synced {
+                    // The master serves another start of this board: say hello again.
+                    self.synced = false;
+                    self.hello_sent = false;
+                }
             }
         }
         if !self.placed {
@@ -537,9 +550,17 @@ impl<const N: usize> Slave<N> {
             received: self.received,
             standalone: self.mode == Mode::StandAlone,
             retry,
-            boot: self.config.boot,
+            boot: self.boot,
             hello: !self.synced,
         }
+    }
+
+    /// The boot number this slave's reports carry: [`SlaveConfig::boot`], unless a sync refill
+    /// named a later start ([`newer_boot`](crate::link::newer_boot)), in which case the number
+    /// after that one (the firmware may store it as the last boot number used).
+    #[must_use]
+    pub fn boot(&self) -> u8 {
+        self.boot
     }
 
     /// `true` once a sync refill has placed this slave in the master's stream.
@@ -807,5 +828,65 @@ mod tests {
         let next: Vec<u8> = (0..4).map(|_| s.step(|_, _| 0xEE).item).collect();
         assert_eq!(next, [8, 9, 10, 11]);
         assert_eq!(s.mode(), Mode::Linked);
+    }
+
+    fn sync(s: &mut Slave<8>, first: u16, items: &[u8], boot: u8) -> Result<usize, FrameError> {
+        let mut buf = [0; MAX_FRAME];
+        let n = Refill {
+            slave: 1,
+            first,
+            items,
+            boot,
+            sync: true,
+        }
+        .encode(&mut buf)
+        .unwrap();
+        s.on_frame(&buf[..n])
+    }
+
+    /// A session offer (a sync of no items) never places a board, of its own boot or another.
+    #[test]
+    fn an_offer_never_places() {
+        for boot in 0..=255u8 {
+            let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
+            assert!(s.poll_report().unwrap().hello);
+            assert_eq!(sync(&mut s, 100, &[], boot), Ok(0));
+            assert!(!s.placed());
+            for _ in 0..3 {
+                s.step(|_, _| 0xEE);
+            }
+            assert!(s.poll_report().unwrap().hello, "still saying hello");
+        }
+    }
+
+    /// Every boot number an offer can name: a placed board says hello again for any other
+    /// number; for a later start than its own (1..=127 ahead) it takes the number after it,
+    /// which the master then takes as a later start than its session.
+    #[test]
+    fn an_offer_of_another_start_makes_the_board_say_hello() {
+        for offered in 0..=255u8 {
+            let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
+            let _ = s.poll_report();
+            assert_eq!(sync(&mut s, 100, &[1, 2, 3, 4], 9), Ok(4));
+            s.step(|_, _| 0xEE);
+            assert!(!s.poll_report().unwrap().hello);
+            assert_eq!(sync(&mut s, 0, &[], offered), Ok(0));
+            let r = s.poll_report();
+            if offered == 9 {
+                assert!(r.is_none_or(|r| !r.hello));
+                continue;
+            }
+            let r = r.unwrap();
+            assert!(r.hello, "offer {offered}");
+            assert_eq!((r.consumed, r.received, s.slack()), (101, 104, 3));
+            let later = crate::link::newer_boot(offered, 9);
+            assert_eq!(r.boot, if later { offered.wrapping_add(1) } else { 9 });
+            assert!(crate::link::newer_boot(r.boot, offered) || !later);
+            assert_eq!(s.boot(), r.boot);
+            // The master's answer for the board's number places nothing anew: the ring and
+            // counters stay, only the missing items are taken.
+            assert_eq!(sync(&mut s, 101, &[2, 3, 4, 5], r.boot), Ok(1));
+            assert!(!s.report(false).hello, "synced again");
+        }
     }
 }

@@ -3,13 +3,26 @@
 //! slave's ring never holds more than its capacity and its reports say so; a non-master item is
 //! the local pattern's, and a master item comes only from a slave a sync refill placed; the
 //! master never owes more than the ring holds, ignores a report of another boot than its
-//! session's, and resumes a session started by a hello where the newest report left it.
+//! session's and a hello of an earlier start (changing nothing but the count of stale reports)
+//! and answers it with a session offer, and resumes a session started by a hello of the same
+//! or a later start where the newest report left it.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use regler_ring_transfer::{
     Master, Message, ReportOutcome, Slave, SlaveConfig, SlaveParams, Source, decode, link,
+    link::newer_boot,
 };
+
+fn link_status(
+    status: regler_ring_transfer::SlaveStatus,
+    stale_reports: u32,
+) -> regler_ring_transfer::SlaveStatus {
+    regler_ring_transfer::SlaveStatus {
+        stale_reports,
+        ..status
+    }
+}
 
 fuzz_target!(|data: &[u8]| {
     let Ok(mut slave) = Slave::<16>::new(SlaveConfig {
@@ -51,11 +64,16 @@ fuzz_target!(|data: &[u8]| {
                 let outcome = master.on_report(now, 1, &report).expect("attached");
                 let after = master.status(1).expect("attached");
                 assert!(after.owed <= 16);
-                if !report.hello && before.reports > 0 && report.boot != before.boot {
-                    assert_eq!(outcome, ReportOutcome::Stale, "a report of another boot");
-                    assert_eq!(after, before);
-                }
-                if report.hello {
+                let other_boot = before.reports > 0 && report.boot != before.boot;
+                let ignored = other_boot && !(report.hello && newer_boot(report.boot, before.boot));
+                if ignored {
+                    assert_eq!(outcome, ReportOutcome::Stale, "a report of another start");
+                    let stale_reports = before.stale_reports + 1;
+                    assert_eq!(after.stale_reports, stale_reports);
+                    assert_eq!(after, link_status(before, stale_reports));
+                    let offer = master.next_refill(now, 4).expect("an offer");
+                    assert_eq!((offer.count, offer.sync, offer.boot), (0, true, before.boot));
+                } else if report.hello {
                     assert!(!after.linked);
                     assert_eq!(after.consumed, before.consumed, "resumes where it was");
                     assert_eq!(

@@ -4,6 +4,12 @@
 //! at the level the plant meets them: an item labelled `Source::Master` is the master's item at
 //! the stream index the board stands at; a rebooted board is placed at or before the furthest
 //! point any earlier board reached (nothing skipped); a board never holds more than its ring.
+//! At the end every frame still held back arrives (late frames of earlier starts among them),
+//! then the link is clean: the board must be placed within `retry_after + 1` steps, the
+//! master's session must be the board's start, and both must say linked within
+//! `retry_after + 2·row_len + 2` steps, whatever happened before. Boot numbers increase by one
+//! at every start (the firmware's rule), up to 121 starts (inside the window of 128 in which
+//! `link::newer_boot` orders them).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -125,7 +131,7 @@ fuzz_target!(|data: &[u8]| {
                 let f = down[arg % down.len()].clone();
                 down.push(f);
             }
-            7 if boot < 200 => {
+            7 if boot < 121 => {
                 boot += 1;
                 slave = Slave::new(config(boot)).expect("valid");
             }
@@ -135,4 +141,82 @@ fuzz_target!(|data: &[u8]| {
         up.truncate(64);
         down.truncate(256);
     }
+    // Everything still on the link arrives, in the order the fuzzer left it.
+    let mut serve = |master: &mut Master<1>, slave: &mut Slave<RING>, now: u64, r: &link::Report| {
+        let outcome = master.on_report(now, 0, r).expect("attached");
+        let mut frames = Vec::new();
+        if outcome == (ReportOutcome::Accepted { owed: 0 }) {
+            let n = Refill::keep_alive(2).encode(&mut frame).expect("fits");
+            frames.push(frame[..n].to_vec());
+        }
+        while let Some(g) = master.next_refill(now, link::MAX_REFILL as u32) {
+            let n = g.count as usize;
+            for (k, item) in items[..n].iter_mut().enumerate() {
+                *item = stream(g.first + k as u64);
+            }
+            let len = g.refill(2, &items[..n]).encode(&mut frame).expect("fits");
+            frames.push(frame[..len].to_vec());
+        }
+        for f in frames {
+            let was_placed = slave.placed();
+            slave.on_frame(&f).expect("a genuine refill for this board");
+            if !was_placed && slave.placed() {
+                return Some(extend(
+                    master.status(0).expect("attached").consumed,
+                    slave.report(false).consumed,
+                ));
+            }
+        }
+        None
+    };
+    for f in up.drain(..) {
+        let Ok(link::Message::Report(r)) = link::decode(&f) else {
+            panic!("a genuine report decodes");
+        };
+        if let Some(at) = serve(&mut master, &mut slave, now, &r) {
+            abs = at;
+            assert!(abs <= furthest, "placed at {abs}, beyond {furthest}");
+        }
+    }
+    for f in down.drain(..) {
+        let was_placed = slave.placed();
+        slave.on_frame(&f).expect("a genuine refill for this board");
+        if !was_placed && slave.placed() {
+            abs = extend(
+                master.status(0).expect("attached").consumed,
+                slave.report(false).consumed,
+            );
+            assert!(abs <= furthest, "placed at {abs}, beyond {furthest}");
+        }
+    }
+    // A clean link (every frame delivered at once) from here.
+    let c = config(boot);
+    let placed_by = u64::from(c.retry_after) + 1;
+    let linked_by = u64::from(c.retry_after) + 2 * u64::from(c.row_len) + 2;
+    for step in 1..=linked_by {
+        now += 1;
+        let placed = slave.placed();
+        let out = slave.step(|_, col| 251 + col as u8);
+        match out.source {
+            Source::Master => assert_eq!(out.item, stream(abs), "index {abs}"),
+            _ => assert_eq!(out.item, 251 + out.col as u8),
+        }
+        if placed && out.source != Source::Local {
+            abs += 1;
+            furthest = furthest.max(abs);
+        }
+        if let Some(r) = slave.poll_report()
+            && let Some(at) = serve(&mut master, &mut slave, now, &r)
+        {
+            abs = at;
+            assert!(abs <= furthest, "placed at {abs}, beyond {furthest}");
+        }
+        if step == placed_by {
+            assert!(slave.placed(), "not placed {placed_by} clean steps after the faults");
+        }
+    }
+    let status = master.status(0).expect("attached");
+    assert_eq!(status.boot, slave.boot(), "the master serves another start");
+    assert!(status.linked, "the master does not say linked: {status:?}");
+    assert_eq!(slave.mode(), regler_ring_transfer::Mode::Linked, "the board is not linked");
 });

@@ -44,6 +44,8 @@ pub(crate) struct Wire {
     pub(crate) duplicate: u8,
     pub(crate) late: u8,
     pub(crate) jitter: u64,
+    /// Frames lost so far.
+    pub(crate) lost: u64,
 }
 
 impl Wire {
@@ -56,6 +58,7 @@ impl Wire {
             duplicate: 0,
             late: 0,
             jitter: 0,
+            lost: 0,
         }
     }
     fn roll(&mut self) -> u8 {
@@ -66,6 +69,7 @@ impl Wire {
     }
     pub(crate) fn send(&mut self, now: u64, frame: &[u8], faulty: bool) {
         if faulty && self.roll() < self.loss {
+            self.lost += 1;
             return;
         }
         let copies = if faulty && self.roll() < self.duplicate {
