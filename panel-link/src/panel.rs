@@ -256,7 +256,8 @@ pub struct HostStats {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 enum HostState {
-    /// Sending; `next` = 0 is the reset byte, k the register k − 1 (the snapshot is taken at 1).
+    /// Sending; `next` = 0 is the reset byte, 1 the idle byte time after it (or the key's
+    /// turn), k ≥ 2 the register k − 2 (the snapshot is taken at 2).
     Sending { next: usize },
     /// SÄN up, listening.
     AwaitKey { polls: u16, last: Option<u8> },
@@ -299,8 +300,6 @@ pub struct Host<const R: usize> {
     between: bool,
     /// The registers of a sequence have gone out: the next reset byte completes it.
     open: bool,
-    /// The idle byte time after the reset byte has been left.
-    gap: bool,
     stats: HostStats,
 }
 
@@ -327,7 +326,6 @@ impl<const R: usize> Host<R> {
             ignore_polls: 0,
             between: false,
             open: false,
-            gap: false,
             stats: HostStats {
                 sequences: 0,
                 keys: 0,
@@ -404,21 +402,21 @@ impl<const R: usize> Host<R> {
                 };
                 return None;
             }
-            if !core::mem::replace(&mut self.gap, true) {
-                // One byte time of idle line after the reset byte: a bit receiver that lost
-                // character sync (a flipped start bit on back-to-back frames) finds the start
-                // bits again before the registers.
-                return None;
-            }
-            self.gap = false;
+            // One byte time of idle line after the reset byte: a bit receiver that lost
+            // character sync (a flipped start bit on back-to-back frames) finds the start bits
+            // again before the registers.
+            self.state = HostState::Sending { next: 2 };
+            return None;
+        }
+        if next == 2 {
             self.sending = self.registers;
         }
         let byte = self
             .sending
-            .get(next.saturating_sub(1))
+            .get(next.saturating_sub(2))
             .copied()
             .unwrap_or(RESET);
-        let next = if next >= R {
+        let next = if next > R {
             self.open = true;
             0
         } else {
