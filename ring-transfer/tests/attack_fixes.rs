@@ -11,6 +11,8 @@
     reason = "a test may panic: that is how it fails"
 )]
 
+mod common;
+
 use std::collections::VecDeque;
 
 use regler_ring_transfer::link::{self, Message, decode};
@@ -18,11 +20,6 @@ use regler_ring_transfer::{
     MAX_DRIFT, Master, Mode, Refill, Report, ReportOutcome, Slave, SlaveConfig, SlaveConfigError,
     SlaveParams, Source,
 };
-
-fn pat(i: u64) -> u8 {
-    let x = i.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    (x >> 56) as u8 ^ (x >> 13) as u8
-}
 
 fn encode_report(r: &Report) -> Vec<u8> {
     let mut b = [0u8; link::MAX_FRAME];
@@ -44,7 +41,9 @@ fn serve<const S: usize>(master: &mut Master<S>, now: u64, report: &Report) -> V
     let mut any = false;
     while let Some(g) = master.next_refill(now, link::MAX_REFILL as u32) {
         any = true;
-        let items: Vec<u8> = (0..u64::from(g.count)).map(|k| pat(g.first + k)).collect();
+        let items: Vec<u8> = (0..u64::from(g.count))
+            .map(|k| common::stream(g.first + k))
+            .collect();
         let mut b = [0u8; link::MAX_FRAME];
         let n = g.refill(report.slave, &items).encode(&mut b).unwrap();
         out.push(b[..n].to_vec());
@@ -129,7 +128,7 @@ impl<const N: usize> Run<N> {
         let after = self.slave.report(false).consumed;
         if self.slave.placed() {
             self.index += u64::from(before.wrapping_sub(self.index as u16));
-            if out.source == Source::Master && out.item != pat(self.index) {
+            if out.source == Source::Master && out.item != common::stream(self.index) {
                 self.wrong_items += 1;
             }
             self.index += u64::from(after.wrapping_sub(before));
