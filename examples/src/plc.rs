@@ -453,7 +453,7 @@ pub struct Simulator {
     pub reports: std::collections::VecDeque<Report>,
     /// Reports run in all.
     pub reports_run: u64,
-    /// The calendar clock, advanced by the cycle.
+    /// The calendar clock, advanced by the plant's wall clock.
     pub clock: DateTime,
     /// Shift changes: programs started at given minutes.
     pub table: MinuteTable<Report, 4>,
@@ -506,14 +506,16 @@ impl Simulator {
                 return (done, Some(halt));
             }
             done += 1;
-            // The clock, and the minute table at each whole minute.
-            if self.clock.advance(PERIOD_MS) > 0 {
-                for report in self.table.due(&self.clock) {
-                    if self.program.spool.push(*report).is_err() {
-                        self.program.spool_refused += 1;
-                    }
+            // The calendar goes by the plant's wall clock (here the simulated period), never by
+            // the executive's program time, which leaves power outages out. The minute table
+            // hands out each start once, late if the clock jumped over its minute.
+            self.clock.advance(PERIOD_MS);
+            let (spool, refused) = (&mut self.program.spool, &mut self.program.spool_refused);
+            self.table.check(&self.clock, |due| {
+                if spool.push(*due.program).is_err() {
+                    *refused += 1;
                 }
-            }
+            });
             // Level C: the reserve runs the spool.
             let (reports, run) = (&mut self.reports, &mut self.reports_run);
             self.plc

@@ -390,22 +390,133 @@ impl<P> fmt::Display for AddError<P> {
 
 impl<P: fmt::Debug> core::error::Error for AddError<P> {}
 
+/// One start handed out by [`MinuteTable::check`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub struct Due<'a, P> {
+    /// What to start.
+    pub program: &'a P,
+    /// Whole minutes between the minute the start was set for and the minute the clock is in
+    /// now: 0 when it runs in its own minute.
+    pub minutes_late: u64,
+    /// Earlier times of the same line that the clock jumped over and that do not run.
+    pub missed: u64,
+}
+
+/// What one [`MinuteTable::check`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub struct Checked {
+    /// Starts handed out in their own minute.
+    pub on_time: usize,
+    /// Starts handed out late: the clock had jumped over their minute.
+    pub late: usize,
+    /// Times the clock jumped over that were not handed out (a line runs at most once per
+    /// check: these are its earlier times).
+    pub missed: u64,
+    /// How many minutes the clock stands behind the latest minute already checked (it was set
+    /// back); 0 when it is not behind. Nothing runs until it has passed that minute again.
+    pub behind_minutes: u64,
+}
+
+const MINUTES_PER_DAY: i64 = 1440;
+const MINUTES_PER_WEEK: i64 = 7 * MINUTES_PER_DAY;
+
+/// Whole minutes since 0001-01-01 00:00 (the seconds left out); at most about 5.3 · 10⁹.
+fn minute_number(t: &DateTime) -> i64 {
+    day_number(t.year, t.month, t.day)
+        .saturating_mul(MINUTES_PER_DAY)
+        .saturating_add(i64::from(t.hour).saturating_mul(60))
+        .saturating_add(i64::from(t.minute))
+}
+
+impl<P> Start<P> {
+    /// How many times this line falls in minutes `..= t` (minute numbers from 0, day 0 a
+    /// Monday), and the latest of them.
+    fn times_up_to(&self, t: i64) -> (i64, Option<i64>) {
+        let time_of_day = i64::from(self.hour)
+            .saturating_mul(60)
+            .saturating_add(i64::from(self.minute));
+        let mut count = 0i64;
+        let mut latest = None;
+        for (day, offset) in (1u8..=7).zip(0i64..) {
+            if !self.days.contains(day) {
+                continue;
+            }
+            // The line's first time on this weekday; then one every week.
+            let first = offset
+                .saturating_mul(MINUTES_PER_DAY)
+                .saturating_add(time_of_day);
+            let Some(weeks) = t.checked_sub(first).map(|d| d.div_euclid(MINUTES_PER_WEEK)) else {
+                continue;
+            };
+            if weeks < 0 {
+                continue;
+            }
+            count = count.saturating_add(weeks.saturating_add(1));
+            let last = first.saturating_add(weeks.saturating_mul(MINUTES_PER_WEEK));
+            latest = latest.max(Some(last));
+        }
+        (count, latest)
+    }
+}
+
 /// The source's minute table: each whole minute the table is checked for programs to start then
 /// (it switched between six sorting schedules and printed statistics at 24:00).
+///
+/// **What a check hands out.** [`check`](MinuteTable::check) is called with the clock each cycle
+/// (or each minute). The table remembers the latest minute it has checked, and hands out every
+/// line whose time falls after that minute and up to the minute the clock is in now, once:
+/// - *In time*: a line set for the minute the clock is in runs then (`minutes_late` 0).
+/// - *Forward jump* (the clock was set forward, or the calendar was set from a real-time clock
+///   after an outage): a line whose time the clock jumped over runs once, late, with
+///   `minutes_late` saying how late. Starts come out in the order of their times, lines set for
+///   the same time in table order.
+/// - *Long jump*: a line runs at most once per check, for its latest time in the jump; its earlier
+///   times are counted as `missed` (a daily report after a three-day outage runs once, and
+///   reports 2 missed), so a check hands out at most `M` starts, whatever the jump.
+/// - *Set-back* (a clock corrected backwards, a summer-time change): a start already handed out
+///   is not handed out again. The table keeps the latest minute it reached and hands out nothing
+///   until the clock has passed it again; [`Checked::behind_minutes`] says how far behind the
+///   clock stands. After a wrong clock was corrected backwards by more than that should hold
+///   (the plant had run on a date in the future), the operator re-arms the table with
+///   [`set_checked_up_to`](MinuteTable::set_checked_up_to).
+/// - *First check* (a new table, or after `set_checked_up_to(None)`): only lines set for the
+///   minute the clock is in run; nothing is known about earlier minutes.
+///
+/// The cost of a check is O(M log M) for any jump, with no loop over the minutes jumped.
+///
+/// **Which clock.** Drive the [`DateTime`] from a wall clock, not from the executive's program
+/// time ([`Executive::now_ms`](crate::Executive::now_ms) leaves power outages out, so a calendar
+/// advanced from it would stay behind by every outage for good): advance it by the time a
+/// free-running hardware counter measured, and after power returns set it afresh from the
+/// real-time clock (`DateTime::new` with the RTC's fields). The table then catches up by the rules
+/// above. Keep [`checked_up_to`](MinuteTable::checked_up_to) in battery-backed memory to carry
+/// the rule over a restart.
 ///
 /// ```
 /// use regler_scan_cycle::{DateTime, MinuteTable, Start, Weekdays};
 /// let mut table: MinuteTable<&str, 8> = MinuteTable::new();
 /// assert!(table.add(Start { hour: 6, minute: 0, days: Weekdays::WORKDAYS, program: "morning schedule" }).is_ok());
-/// assert!(table.add(Start { hour: 0, minute: 0, days: Weekdays::ALL, program: "print statistics" }).is_ok());
+/// assert!(table.add(Start { hour: 6, minute: 1, days: Weekdays::ALL, program: "lamp test" }).is_ok());
 /// let mut clock = DateTime::new(2026, 11, 23, 5, 59, 30)?; // a Monday
-/// assert_eq!(clock.advance(30_000), 1);                     // 06:00:00
-/// assert_eq!(table.due(&clock).collect::<Vec<_>>(), [&"morning schedule"]);
+/// let mut started = Vec::new();
+/// table.check(&clock, |due| started.push((*due.program, due.minutes_late)));
+/// clock.advance(150_000);                                   // a jump to 06:02:00
+/// let checked = table.check(&clock, |due| started.push((*due.program, due.minutes_late)));
+/// assert_eq!(started, [("morning schedule", 2), ("lamp test", 1)]);
+/// assert_eq!((checked.on_time, checked.late, checked.missed), (0, 2, 0));
+/// let earlier = DateTime::new(2026, 11, 23, 5, 58, 0)?;      // set back: nothing runs twice
+/// assert_eq!(table.check(&earlier, |_| unreachable!()).behind_minutes, 4);
 /// # Ok::<(), regler_scan_cycle::InvalidDateTime>(())
 /// ```
 #[derive(Clone, Debug)]
 pub struct MinuteTable<P, const M: usize> {
     starts: Vec<Start<P>, M>,
+    /// The latest minute checked, seconds zero.
+    checked_up_to: Option<DateTime>,
 }
 
 impl<P, const M: usize> Default for MinuteTable<P, M> {
@@ -415,10 +526,13 @@ impl<P, const M: usize> Default for MinuteTable<P, M> {
 }
 
 impl<P, const M: usize> MinuteTable<P, M> {
-    /// An empty table.
+    /// An empty table that has checked no minute yet.
     #[must_use]
     pub const fn new() -> MinuteTable<P, M> {
-        MinuteTable { starts: Vec::new() }
+        MinuteTable {
+            starts: Vec::new(),
+            checked_up_to: None,
+        }
     }
 
     /// Adds a line; a full table or an impossible time is an error that hands the line back.
@@ -429,7 +543,85 @@ impl<P, const M: usize> MinuteTable<P, M> {
         self.starts.push(start).map_err(AddError::Full)
     }
 
-    /// The programs to start in the minute `now` lies in.
+    /// Checks the table at clock time `now` and hands each start that is due to `start`, by the
+    /// rules in the type's documentation: every line whose time falls after the latest minute
+    /// checked and up to `now`'s minute runs once, late if the clock jumped over it, earlier
+    /// times of the same line counted as missed; nothing runs twice when the clock is set back.
+    pub fn check(&mut self, now: &DateTime, mut start: impl FnMut(Due<'_, P>)) -> Checked {
+        let mut now_minute = *now;
+        now_minute.second = 0;
+        now_minute.millis = 0;
+        let to = minute_number(&now_minute);
+        let from = match self.checked_up_to {
+            None => to.saturating_sub(1),
+            Some(reached) => {
+                let reached = minute_number(&reached);
+                if to <= reached {
+                    return Checked {
+                        behind_minutes: u64::try_from(reached.saturating_sub(to)).unwrap_or(0),
+                        ..Checked::default()
+                    };
+                }
+                reached
+            }
+        };
+        self.checked_up_to = Some(now_minute);
+        // Each line's latest time in (from, to], and how many of its times fall there.
+        let mut due: Vec<(i64, usize, u64), M> = Vec::new();
+        let mut checked = Checked::default();
+        for (index, line) in self.starts.iter().enumerate() {
+            let (count_to, latest) = line.times_up_to(to);
+            let (count_from, _) = line.times_up_to(from);
+            let times = u64::try_from(count_to.saturating_sub(count_from)).unwrap_or(0);
+            if let Some(at) = latest.filter(|_| times > 0) {
+                let missed = times.saturating_sub(1);
+                checked.missed = checked.missed.saturating_add(missed);
+                // At most M lines: the push cannot fail.
+                let _ = due.push((at, index, missed));
+            }
+        }
+        due.sort_unstable();
+        for &(at, index, missed) in &due {
+            let Some(line) = self.starts.get(index) else {
+                continue;
+            };
+            let minutes_late = u64::try_from(to.saturating_sub(at)).unwrap_or(0);
+            if minutes_late == 0 {
+                checked.on_time = checked.on_time.saturating_add(1);
+            } else {
+                checked.late = checked.late.saturating_add(1);
+            }
+            start(Due {
+                program: &line.program,
+                minutes_late,
+                missed,
+            });
+        }
+        checked
+    }
+
+    /// The latest minute the table has checked (seconds zero): what it will not hand out again.
+    /// `None` before the first check.
+    #[must_use]
+    pub const fn checked_up_to(&self) -> Option<DateTime> {
+        self.checked_up_to
+    }
+
+    /// Sets the latest minute checked: to carry it over a restart from battery-backed memory, or
+    /// to re-arm the table after a clock that ran ahead was corrected backwards (`None`: the
+    /// next check runs only the lines of the minute it is in).
+    pub fn set_checked_up_to(&mut self, minute: Option<DateTime>) {
+        self.checked_up_to = minute.map(|mut m| {
+            m.second = 0;
+            m.millis = 0;
+            m
+        });
+    }
+
+    /// The lines set for the minute `now` lies in, whether or not they were handed out. A query
+    /// for a display: it remembers nothing, so a program driven by it loses the starts of every
+    /// minute the clock jumps over and repeats those it is set back across. Start programs with
+    /// [`check`](MinuteTable::check).
     pub fn due<'a>(&'a self, now: &DateTime) -> impl Iterator<Item = &'a P> + 'a {
         let (h, m, d) = (now.hour(), now.minute(), now.weekday());
         self.starts

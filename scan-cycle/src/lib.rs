@@ -19,7 +19,9 @@ mod signals;
 mod timer_queue;
 
 pub use blocks::{Ctd, Ctu, Ctud, FTrig, RTrig, Rs, Sr, Tof, Ton, Tp};
-pub use calendar::{AddError, DateTime, InvalidDateTime, MinuteTable, Start, Weekdays};
+pub use calendar::{
+    AddError, Checked, DateTime, Due, InvalidDateTime, MinuteTable, Start, Weekdays,
+};
 pub use executive::{
     Breakpoint, BreakpointWatch, Condition, CycleConfig, CycleStats, Executive, Halt, Io, Routine,
     Scan, Spool, StepChain,
