@@ -252,6 +252,15 @@ impl<const W: usize> Forcing<W> {
 /// each input that was on; at the next cycle the input reads on even if the pulse is over, and
 /// the memory is cleared.
 ///
+/// **Latched or debounced, not both.** A latch says that a pulse shorter than a cycle is an event
+/// to be seen; a debounce count of k says that a change shorter than k readings is contact bounce
+/// to be ignored. No rule serves both for one input: a latched pulse held on until the debounce
+/// accepts it would let every bounce through as well, so the debounce would filter nothing.
+/// Which one an input needs is a property of its wiring (a clean sensor pulse, as the source's
+/// input flip-flops caught, or a bouncing contact, for which the source asked several equal
+/// readings), so the combination is refused with [`DebounceError::Latched`]: a latched point
+/// keeps count 1, a debounced point is not latched.
+///
 /// **Debounce.** A debounced input with count k changes its conditioned value only after k
 /// consecutive readings that differ from it (1 = no debounce; at most 15). A count changed while
 /// an input is counting applies to the readings already counted: lowered below them, the next
@@ -259,8 +268,9 @@ impl<const W: usize> Forcing<W> {
 /// so a cycle costs a few dozen word operations per 16 inputs, whatever the counts. A
 /// `Conditioning<W>` is 11 images of `W` words: `22·W` bytes.
 ///
-/// Deserializing checks that every point's debounce count is 1..=15: a stored count of 0 (a
-/// corrupt block) is an error, not an input that never debounces.
+/// Deserializing checks that every point's debounce count is 1..=15 (a stored count of 0, a
+/// corrupt block, is an error, not an input that never debounces) and that no latched point is
+/// debounced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -304,6 +314,17 @@ impl<const W: usize> TryFrom<RawConditioning<W>> for Conditioning<W> {
                 let point = w.saturating_mul(POINTS_PER_WORD).saturating_add(bit);
                 return Err(DebounceError::StoredCount { point, count: 0 });
             }
+            let latched = raw.latched.words.get(w).copied().unwrap_or(0);
+            let both = latched & (!a | b | c | d);
+            if both != 0 {
+                let bit = usize::try_from(both.trailing_zeros()).unwrap_or(0);
+                let point = w.saturating_mul(POINTS_PER_WORD).saturating_add(bit);
+                let count = u8::from(a >> bit & 1 == 1)
+                    | u8::from(b >> bit & 1 == 1) << 1
+                    | u8::from(c >> bit & 1 == 1) << 2
+                    | u8::from(d >> bit & 1 == 1) << 3;
+                return Err(DebounceError::Latched { point, count });
+            }
         }
         Ok(Conditioning {
             latched: raw.latched,
@@ -321,7 +342,8 @@ impl<const W: usize> Default for Conditioning<W> {
     }
 }
 
-/// A debounce count outside 1..=15.
+/// A conditioning setting refused: a debounce count outside 1..=15, a point outside the image,
+/// or a latched input that would be debounced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
@@ -337,6 +359,14 @@ pub enum DebounceError {
         /// Its stored count.
         count: u8,
     },
+    /// The point would be latched and debounced at once (see [`Conditioning`]): a latched point
+    /// keeps count 1.
+    Latched {
+        /// The point.
+        point: usize,
+        /// The debounce count it has or was to get (above 1).
+        count: u8,
+    },
 }
 
 impl fmt::Display for DebounceError {
@@ -347,6 +377,11 @@ impl fmt::Display for DebounceError {
             DebounceError::StoredCount { point, count } => write!(
                 f,
                 "stored conditioning gives point {point} a debounce count of {count}, not 1..=15"
+            ),
+            DebounceError::Latched { point, count } => write!(
+                f,
+                "point {point} cannot be latched and debounced (count {count}) at once: \
+                 a latch keeps pulses a debounce would drop; latched points keep count 1"
             ),
         }
     }
@@ -369,15 +404,38 @@ impl<const W: usize> Conditioning<W> {
         }
     }
 
-    /// Latches (or stops latching) short pulses on `point`.
-    pub fn set_latched(&mut self, point: usize, latched: bool) -> Result<(), PointError> {
-        self.latched.set(point, latched)
+    /// Latches (or stops latching) short pulses on `point`. A point whose debounce count is
+    /// above 1 is refused with [`DebounceError::Latched`]: it cannot be latched and debounced.
+    pub fn set_latched(&mut self, point: usize, latched: bool) -> Result<(), DebounceError> {
+        if point >= Image::<W>::POINTS {
+            return Err(DebounceError::Point(PointError {
+                point,
+                points: Image::<W>::POINTS,
+            }));
+        }
+        let count = self.debounce(point);
+        if latched && count != 1 {
+            return Err(DebounceError::Latched { point, count });
+        }
+        self.latched
+            .set(point, latched)
+            .map_err(DebounceError::Point)
     }
 
-    /// Sets the debounce count of `point` (1..=15 consecutive readings).
+    /// Whether `point` is latched.
+    #[must_use]
+    pub fn latched(&self, point: usize) -> bool {
+        self.latched.get(point)
+    }
+
+    /// Sets the debounce count of `point` (1..=15 consecutive readings). A count above 1 on a
+    /// latched point is refused with [`DebounceError::Latched`].
     pub fn set_debounce(&mut self, point: usize, count: u8) -> Result<(), DebounceError> {
         if !(1..=15).contains(&count) {
             return Err(DebounceError::Count(count));
+        }
+        if count != 1 && self.latched.get(point) {
+            return Err(DebounceError::Latched { point, count });
         }
         for (bit, plane) in self.thresholds.iter_mut().enumerate() {
             plane
@@ -553,6 +611,37 @@ mod tests {
                 n += 1;
             }
             assert_eq!(n, k);
+        }
+    }
+
+    /// Every point, every count above 1, set in either order: a latched input that is also
+    /// debounced is refused, or else its short pulse would have to come through.
+    #[test]
+    fn a_latched_input_is_never_a_debounced_one_that_loses_its_pulses() {
+        for p in 0..32 {
+            for k in 2..=15u8 {
+                for latch_first in [false, true] {
+                    let mut c: Conditioning<2> = Conditioning::new();
+                    let accepted = if latch_first {
+                        c.set_latched(p, true).is_ok() && c.set_debounce(p, k).is_ok()
+                    } else {
+                        c.set_debounce(p, k).is_ok() && c.set_latched(p, true).is_ok()
+                    };
+                    if !accepted {
+                        continue;
+                    }
+                    let mut raw = [0u16; 2];
+                    raw[p / 16] = 1 << (p % 16);
+                    c.capture(&raw); // a pulse shorter than a cycle
+                    let mut out = Image::new();
+                    let mut seen = false;
+                    for _ in 0..16 {
+                        c.condition(&[0, 0], &mut out);
+                        seen |= out.get(p);
+                    }
+                    assert!(seen, "point {p}, count {k}: the latched pulse was lost");
+                }
+            }
         }
     }
 

@@ -313,17 +313,26 @@ mod debounce {
             let mut c: Conditioning<2> = Conditioning::new();
             let mut model = [Input::default(); 32];
             for (p, m) in model.iter_mut().enumerate() {
-                m.k = ks[p];
+                // Latched points keep count 1; asking for both is refused.
                 m.latched = latched >> p & 1 == 1;
-                c.set_debounce(p, m.k).unwrap();
-                c.set_latched(p, m.latched).unwrap();
+                m.k = if m.latched { 1 } else { ks[p] };
+                c.set_debounce(p, ks[p]).unwrap();
+                let refused = c.set_latched(p, m.latched).is_err();
+                prop_assert_eq!(refused, m.latched && ks[p] != 1);
+                if refused {
+                    c.set_debounce(p, 1).unwrap();
+                    c.set_latched(p, true).unwrap();
+                }
             }
             for (op, bits, point, k) in ops {
                 let raw = [bits as u16, (bits >> 16) as u16];
                 match op {
                     0 => {
-                        c.set_debounce(point, k).unwrap();
-                        model[point].k = k;
+                        let refused = c.set_debounce(point, k).is_err();
+                        prop_assert_eq!(refused, model[point].latched && k != 1);
+                        if !refused {
+                            model[point].k = k;
+                        }
                     }
                     1 => {
                         c.capture(&raw);

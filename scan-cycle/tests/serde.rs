@@ -50,4 +50,14 @@ fn bad_stored_state_is_refused() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("point 0 a debounce count of 0"), "{err}");
+    // Latch point 3, which is debounced with count 7: a latched pulse would be lost.
+    let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    value["latched"]["words"][0] = serde_json::json!(1 << 3);
+    let err = serde_json::from_value::<Conditioning<2>>(value)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("point 3 cannot be latched and debounced (count 7)"),
+        "{err}"
+    );
 }
