@@ -11,14 +11,16 @@ const NIL: u32 = u32::MAX;
 
 /// A handle on an inserted timer. It stays valid until the timer expires or is removed; after
 /// that it is stale forever and can never touch a newer timer in the same place: each place
-/// counts its uses in a 32-bit generation, and a place whose generation is used up is retired
-/// rather than reused (after 2³² timers in one place — 49.7 days of a 1 kHz timer that is always
-/// re-armed in the same place — the queue has room for one timer fewer).
+/// counts its uses in a 64-bit generation, so no two timers in one place share a handle. The
+/// count cannot run out in a plant's life: 2⁶⁴ timers in one place take 584 years at one a
+/// nanosecond (a 32-bit count ran out after 2³² timers: 2.2 years of 16 timers re-armed at
+/// 1 kHz). Should it ever be used up, the place is retired rather than reused, and the queue has
+/// room for one timer fewer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TimerId {
     index: u32,
-    generation: u32,
+    generation: u64,
 }
 
 /// [`TimerQueue::insert`] on a full queue: the action is handed back.
@@ -55,7 +57,7 @@ impl core::error::Error for UnknownTimer {}
 struct Entry<A> {
     action: Option<A>,
     deadline: u64,
-    generation: u32,
+    generation: u64,
     prev: u32,
     next: u32,
     slot: u16,
@@ -76,8 +78,8 @@ struct Entry<A> {
 /// bounded number of times (at most six) in its life: O(1) amortised per tick, whatever the
 /// number of timers. `N` entries fit; nothing is allocated. Memory: the slot table takes 3 KiB
 /// (384 slots, head and tail each a `u32`) whatever `N`, 16 bytes of counters, and per entry
-/// `size_of::<Option<A>>() + 22` bytes rounded up to a multiple of 8 (24 for `u8`, 32 for `u32`
-/// actions): `TimerQueue<u32, 4096>` is 134 KB, so [`new`](TimerQueue::new) is a `const fn` and
+/// `size_of::<Option<A>>() + 26` bytes rounded up to a multiple of 8 (32 for `u8`, 40 for `u32`
+/// actions): `TimerQueue<u32, 4096>` is 167 KB, so [`new`](TimerQueue::new) is a `const fn` and
 /// such a queue belongs in a `static`. A unit test checks the formula.
 ///
 /// ```
@@ -432,18 +434,19 @@ mod tests {
         let mut q: TimerQueue<u8, 2> = TimerQueue::new();
         // Place 0 has handed out every generation but the last.
         if let Some(e) = q.entries.get_mut(0) {
-            e.generation = u32::MAX;
+            e.generation = u64::MAX;
         }
         let last = q.insert(5, 1).unwrap();
         assert_eq!(
             last,
             TimerId {
                 index: 0,
-                generation: u32::MAX
+                generation: u64::MAX
             }
         );
         assert_eq!(q.remove(last), Some(1));
-        // A wrapped generation would be 0 again; the place is retired instead.
+        // A wrapped generation would be 0 again; the place is retired instead (unreachable in
+        // practice: 2⁶⁴ timers in one place).
         let other = q.insert(5, 2).unwrap();
         assert_eq!(other.index, 1);
         assert!(
@@ -461,18 +464,54 @@ mod tests {
         assert_eq!(q.len(), 1);
     }
 
+    /// A place re-armed 2³² times (16 timers at 1 kHz for 2.2 years) still takes timers, and no
+    /// stale handle from before or after the 32-bit boundary acts on the newer timer there.
+    #[test]
+    fn a_place_keeps_working_past_2_pow_32_timers_and_stale_handles_stay_stale() {
+        let mut q: TimerQueue<u8, 1> = TimerQueue::new();
+        let mut stale = Vec::new();
+        if let Some(e) = q.entries.get_mut(0) {
+            e.generation = (u32::MAX - 2).into();
+        }
+        // Six timers in the one place across the boundary: each gets its own handle.
+        for action in 0..6u8 {
+            let id = q.insert(5, action).expect("the place is not retired");
+            for old in &stale {
+                assert_eq!(q.remaining(*old), None);
+                assert_eq!(q.replace(*old, 1), Err(UnknownTimer(*old)));
+                assert_eq!(q.remove(*old), None);
+            }
+            // A handle whose generation is the new one's modulo 2³² names another timer.
+            let mut alias = id;
+            alias.generation = (u64::from(id.generation) % (1u64 << 32))
+                .try_into()
+                .unwrap();
+            if alias != id {
+                assert_eq!(q.remove(alias), None);
+            }
+            assert_eq!(q.remaining(id), Some(5));
+            assert_eq!(q.remove(id), Some(action));
+            stale.push(id);
+        }
+        assert_eq!(q.len(), 0);
+    }
+
     #[test]
     fn size_is_the_documented_formula() {
         use core::mem::size_of;
         // 3 KiB of slot heads and tails, 16 bytes of counters and the clock, and per entry the
-        // action, a u64 deadline and 3 u32 + a u16 of links (padded to the entry's alignment).
-        let entry = |action: usize| (action + 8 + 3 * 4 + 2).next_multiple_of(8);
+        // action, a u64 deadline, a u64 generation and 2 u32 + a u16 of links (padded to the
+        // entry's alignment).
+        let entry = |action: usize| (action + 8 + 8 + 2 * 4 + 2).next_multiple_of(8);
         assert_eq!(size_of::<Entry<u8>>(), entry(2)); // Option<u8> is 2 bytes
         let table = 2 * 6 * 64 * 4;
         let counters = 4 + size_of::<usize>() + 8;
         let size = |entries: usize| (table + counters + entries).next_multiple_of(8);
         assert_eq!(size_of::<TimerQueue<u8, 4096>>(), size(4096 * entry(2)));
         assert_eq!(size_of::<TimerQueue<u32, 16>>(), size(16 * entry(8)));
+        assert_eq!(size_of::<TimerQueue<u32, 4096>>(), 166_936, "167 KB");
+        assert_eq!(entry(2), 32);
+        assert_eq!(entry(8), 40);
     }
 
     #[test]
