@@ -623,9 +623,11 @@ mod tests {
                 for latch_first in [false, true] {
                     let mut c: Conditioning<2> = Conditioning::new();
                     let accepted = if latch_first {
-                        c.set_latched(p, true).is_ok() && c.set_debounce(p, k).is_ok()
+                        let latched = c.set_latched(p, true);
+                        latched.is_ok() && c.set_debounce(p, k).is_ok()
                     } else {
-                        c.set_debounce(p, k).is_ok() && c.set_latched(p, true).is_ok()
+                        let debounced = c.set_debounce(p, k);
+                        debounced.is_ok() && c.set_latched(p, true).is_ok()
                     };
                     if !accepted {
                         continue;
