@@ -369,3 +369,69 @@ fn after_an_outage_a_calendar_set_from_the_real_time_clock_is_right_and_catches_
         "program time leaves the outage out: {slow} min slow"
     );
 }
+
+#[test]
+fn checked_up_to_carries_the_rule_over_a_restart_and_none_re_arms() {
+    let line = |minute, program| Start {
+        hour: 6,
+        minute,
+        days: Weekdays::ALL,
+        program,
+    };
+    let mut table: MinuteTable<u8, 2> = MinuteTable::new();
+    table.add(line(0, 0)).unwrap();
+    table.add(line(1, 1)).unwrap();
+    // Restored from battery-backed memory after a restart: 05:59 was the latest minute checked.
+    table.set_checked_up_to(Some(DateTime::new(2026, 11, 23, 5, 59, 40).unwrap()));
+    assert_eq!(
+        table.checked_up_to(),
+        Some(DateTime::new(2026, 11, 23, 5, 59, 0).unwrap()),
+        "seconds zero"
+    );
+    let now = DateTime::new(2026, 11, 23, 6, 1, 10).unwrap();
+    let mut ran = Vec::new();
+    table.check(&now, |d| ran.push((*d.program, d.minutes_late)));
+    assert_eq!(ran, [(0, 1), (1, 0)]);
+    // Re-armed after a wrong clock was corrected back: only the minute it is in runs.
+    table.set_checked_up_to(None);
+    ran.clear();
+    let back = DateTime::new(2026, 11, 23, 6, 0, 5).unwrap();
+    let c = table.check(&back, |d| ran.push((*d.program, d.minutes_late)));
+    assert_eq!((ran.as_slice(), c.behind_minutes), ([(0, 0)].as_slice(), 0));
+}
+
+#[test]
+fn the_first_week_of_the_calendar_counts_too() {
+    // 0001-01-01, a Monday, is the first day the calendar holds.
+    let mut table: MinuteTable<u8, 1> = MinuteTable::new();
+    table
+        .add(Start {
+            hour: 0,
+            minute: 5,
+            days: Weekdays::ALL,
+            program: 7,
+        })
+        .unwrap();
+    let mut model = Model { reached: None };
+    let lines = [Start {
+        hour: 0,
+        minute: 5,
+        days: Weekdays::ALL,
+        program: 0,
+    }];
+    let mut now = DateTime::new(1, 1, 1, 0, 4, 30).unwrap();
+    let mut got = Vec::new();
+    for _ in 0..3 {
+        let mut ran = Vec::new();
+        let c = table.check(&now, |d| ran.push((*d.program, d.minutes_late, d.missed)));
+        let (want, ..) = model.check(&lines, &now);
+        assert_eq!(ran.len(), want.len());
+        got.push((ran, c.missed));
+        now.advance(2 * 86_400_000);
+    }
+    assert_eq!(
+        got[1],
+        (vec![(7, 1439, 1)], 1),
+        "two days on: the second 00:05 runs 1 439 min late, the first is missed"
+    );
+}
