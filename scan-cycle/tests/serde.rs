@@ -60,4 +60,27 @@ fn bad_stored_state_is_refused() {
         err.contains("point 3 cannot be latched and debounced (count 7)"),
         "{err}"
     );
+    // Every count above 1 on a latched point is refused; a latched point with count 1 comes back.
+    for k in 1..=15u8 {
+        let mut c: Conditioning<2> = Conditioning::new();
+        c.set_latched(9, true).unwrap();
+        let text = serde_json::to_string(&c).unwrap();
+        assert_eq!(serde_json::from_str::<Conditioning<2>>(&text).unwrap(), c);
+        let mut debounced: Conditioning<2> = Conditioning::new();
+        debounced.set_debounce(9, k).unwrap();
+        let mut value = serde_json::to_value(debounced).unwrap();
+        value["latched"]["words"][0] = serde_json::json!(1 << 9);
+        let back = serde_json::from_value::<Conditioning<2>>(value);
+        if k == 1 {
+            assert_eq!(back.unwrap(), c);
+        } else {
+            let err = back.unwrap_err().to_string();
+            assert!(
+                err.contains(&format!(
+                    "point 9 cannot be latched and debounced (count {k})"
+                )),
+                "{err}"
+            );
+        }
+    }
 }
