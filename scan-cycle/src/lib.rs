@@ -21,8 +21,8 @@ mod timer_queue;
 pub use blocks::{Ctd, Ctu, Ctud, FTrig, RTrig, Rs, Sr, Tof, Ton, Tp};
 pub use calendar::{AddError, DateTime, InvalidDateTime, MinuteTable, Start, Weekdays};
 pub use executive::{
-    Breakpoint, BreakpointWatch, Condition, CycleConfig, CycleStats, Executive, Halt, Io, Routine,
-    Scan, Spool, StepChain,
+    Breakpoint, BreakpointError, BreakpointWatch, Condition, CycleConfig, CycleStats, Executive,
+    Halt, Io, Restart, Routine, Scan, Spool, StepChain,
 };
 pub use image::{
     Conditioning, DebounceError, Forcing, Image, POINTS_PER_WORD, PointError, WordError,
