@@ -60,6 +60,7 @@ struct Bus<'a> {
     interrupt: Interrupt,
     fired: Cell<bool>,
     t: Cell<u32>,
+    kicks: Cell<u32>,
 }
 
 impl<'a> Bus<'a> {
@@ -73,6 +74,7 @@ impl<'a> Bus<'a> {
             interrupt,
             fired: Cell::new(false),
             t: Cell::new(1_000),
+            kicks: Cell::new(0),
         }
     }
 
@@ -144,6 +146,7 @@ impl Io<2, OW> for Plant<'_, '_> {
         self.0.t.get()
     }
     fn kick_watchdog(&mut self) {
+        self.0.kicks.set(self.0.kicks.get() + 1);
         self.0.step();
     }
 }
@@ -193,12 +196,19 @@ fn a_trip_or_power_failure_at_every_moment_of_a_cycle_leaves_the_safe_outputs() 
             let mut plc = Executive::new(config());
             cycle_firing(&mut plc, &bus, None).unwrap();
             bus.log.borrow_mut().clear();
+            bus.kicks.set(0);
             let halt = match interrupt {
                 Interrupt::Trip | Interrupt::TripAndReset => Halt::Watchdog,
                 Interrupt::PowerFail | Interrupt::Blip => Halt::PowerFail,
             };
             let mut result = cycle_firing(&mut plc, &bus, Some(fire_at));
             let completed = u64::from(result.is_ok());
+            // The hardware watchdog is pulsed only by a cycle whose write was confirmed.
+            assert_eq!(
+                u64::from(bus.kicks.get()),
+                completed,
+                "{interrupt:?} at {fire_at}"
+            );
             if fire_at == total && lasts {
                 // After the cycle has returned: the next cycle must be refused.
                 bus.fire();
