@@ -44,7 +44,8 @@ pub struct CycleConfig<const OW: usize> {
     /// Cycle period, µs (the source: 50 ms).
     pub period_us: u32,
     /// A cycle that does not finish within this many µs of the last one trips the watchdog
-    /// (the source: 100 ms).
+    /// (the source: 100 ms). A limit above 2³¹ − 2 µs (35.8 minutes) acts as 2³¹ − 2 µs: a
+    /// longer time cannot be told from the clock stepping back.
     pub watchdog_us: u32,
     /// The outputs written on a watchdog trip or a power failure (the source: all off).
     pub safe_outputs: Image<OW>,
@@ -126,6 +127,9 @@ impl<const IW: usize, const OW: usize> BreakpointWatch<IW, OW> {
 /// Half the wrapping range of the µs clock: a reading this far or farther "ahead" of a
 /// reference is the clock stepping back.
 pub(crate) const HALF_RANGE_US: u32 = 1 << 31;
+
+/// The longest watchdog limit: one µs more must still read as time going forward.
+pub(crate) const MAX_WATCHDOG_US: u32 = HALF_RANGE_US - 2;
 
 /// The µs from `from` to `to` on the wrapping clock, or `None` when `to` is behind `from` (a
 /// wrapping difference of 2³¹ µs or more: the clock stepped back).
@@ -674,8 +678,8 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
     /// check when none has finished yet — the safe outputs are written, they become the output
     /// image (the program's previous image after the reset), and cycles are refused. Returns
     /// whether the watchdog is (now) tripped. A reading 2³¹ µs or more behind the last cycle's
-    /// end (a clock stepping back) does not trip it; a limit of 2³¹ µs or more acts as
-    /// 2³¹ − 1 µs.
+    /// end (a clock stepping back) does not trip it; a limit above 2³¹ − 2 µs acts as
+    /// 2³¹ − 2 µs.
     ///
     /// This sees a hang only between cycles, since [`cycle`](Executive::cycle) holds the
     /// executive; to catch a program that hangs inside a cycle, check from a timer interrupt
@@ -696,7 +700,7 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
                 return false;
             }
         };
-        let limit = self.config.watchdog_us.min(HALF_RANGE_US - 1);
+        let limit = self.config.watchdog_us.min(MAX_WATCHDOG_US);
         if forward_us(since, now).is_some_and(|d| d > limit) {
             io.write_outputs(self.config.safe_outputs.words());
             self.previous = self.config.safe_outputs;

@@ -5,7 +5,9 @@ use core::cell::Cell;
 
 use critical_section::Mutex;
 
-use crate::executive::{Begin, CycleConfig, HALF_RANGE_US, Halt, Restart, Supervision};
+use crate::executive::{
+    Begin, CycleConfig, HALF_RANGE_US, Halt, MAX_WATCHDOG_US, Restart, Supervision,
+};
 use crate::image::Image;
 
 #[derive(Clone, Copy)]
@@ -85,14 +87,14 @@ pub struct Signals<const IW: usize, const OW: usize> {
 
 impl<const IW: usize, const OW: usize> Signals<IW, OW> {
     /// Supervision with `config`'s watchdog limit and safe outputs. A `const fn`, for a
-    /// `static`. A limit of 2³¹ µs or more acts as 2³¹ − 1 µs (35.8 minutes): a longer time
+    /// `static`. A limit above 2³¹ − 2 µs (35.8 minutes) acts as 2³¹ − 2 µs: a longer time
     /// cannot be told from a clock stepping back.
     #[must_use]
     pub const fn new(config: &CycleConfig<OW>) -> Signals<IW, OW> {
-        let limit = if config.watchdog_us < HALF_RANGE_US {
+        let limit = if config.watchdog_us <= MAX_WATCHDOG_US {
             config.watchdog_us
         } else {
-            HALF_RANGE_US - 1
+            MAX_WATCHDOG_US
         };
         Signals {
             shared: Mutex::new(Cell::new(Shared {

@@ -661,6 +661,44 @@ fn a_watchdog_check_one_microsecond_before_the_kick_does_not_trip() {
     }
 }
 
+/// A watchdog limit beyond what the wrapping clock can tell from a step back acts as the
+/// longest it can: 2³¹ − 2 µs, at both watchdogs.
+#[test]
+fn the_longest_watchdog_limit_still_trips() {
+    let max = (1u32 << 31) - 2;
+    for (limit, trips_at) in [
+        (max - 1, max),
+        (max, max + 1),
+        (max + 1, max + 1),
+        (u32::MAX, max + 1),
+    ] {
+        let config = CycleConfig::<1> {
+            watchdog_us: limit,
+            ..CycleConfig::source()
+        };
+        for kick in [0u32, u32::MAX - 10] {
+            let signals: Signals<1, 1> = Signals::new(&config);
+            let mut plc: Executive<1, 1> = Executive::new(config);
+            plc.cycle_with(&mut KickAt(kick), &signals, |_| {}).unwrap();
+            assert!(
+                !signals.check_watchdog(kick.wrapping_add(trips_at - 1)),
+                "{limit}"
+            );
+            assert!(
+                signals.check_watchdog(kick.wrapping_add(trips_at)),
+                "{limit}"
+            );
+            let mut io = KickAt(kick);
+            let mut plc: Executive<1, 1> = Executive::new(config);
+            plc.cycle(&mut io, |_| {}).unwrap();
+            io.0 = kick.wrapping_add(trips_at - 1);
+            assert!(!plc.check_watchdog(&mut io), "{limit}");
+            io.0 = kick.wrapping_add(trips_at);
+            assert!(plc.check_watchdog(&mut io), "{limit}");
+        }
+    }
+}
+
 /// Item 7: the reserve runs no job while the power has failed or the watchdog is tripped.
 #[test]
 fn the_reserve_runs_nothing_while_halted() {
