@@ -732,6 +732,36 @@ fn the_reserve_runs_nothing_while_halted() {
     }
 }
 
+/// The reserve's room: a job starts only while the clock is less than `period − margin` past
+/// the cycle's start, with and without `Signals`; a clock that stepped back leaves no room.
+#[test]
+fn the_reserve_starts_jobs_only_with_room_left() {
+    for with_signals in [false, true] {
+        for (since, runs) in [
+            (0u32, true),
+            (39_999, true),
+            (40_000, false),
+            (u32::MAX, false),
+        ] {
+            let signals: Signals<2, OW> = Signals::new(&config());
+            let mut io = bench();
+            io.t = 7;
+            let mut plc = Executive::new(config());
+            plc.cycle(&mut io, |_| {}).unwrap();
+            io.t = 7u32.wrapping_add(since);
+            let mut spool: Spool<u8, 4> = Spool::new();
+            spool.push(1).unwrap();
+            let n = if with_signals {
+                plc.reserve_with(&mut io, &signals, &mut spool, 10_000, |_| {})
+            } else {
+                plc.reserve(&mut io, &mut spool, 10_000, |_| {})
+            };
+            assert_eq!(n, usize::from(runs), "{since} {with_signals}");
+            assert_eq!(plc.stats().spool_jobs, u64::from(runs));
+        }
+    }
+}
+
 /// Item 7: a reset of a watchdog that has not tripped (a bouncing reset key) does not re-arm
 /// its timing: a hung program still trips it.
 #[test]
