@@ -653,6 +653,16 @@ fn a_watchdog_check_one_microsecond_before_the_kick_does_not_trip() {
         let mut plc: Executive<1, 1> = Executive::new(CycleConfig::source());
         plc.cycle_with(&mut KickAt(kick), &signals, |_| {}).unwrap();
         assert!(!signals.check_watchdog(kick.wrapping_sub(1)), "{kick}");
+        // Exactly half the clock's range away reads as behind, for both watchdogs.
+        assert!(
+            !signals.check_watchdog(kick.wrapping_add(1 << 31)),
+            "{kick}"
+        );
+        let mut io = KickAt(kick);
+        let mut own: Executive<1, 1> = Executive::new(CycleConfig::source());
+        own.cycle(&mut io, |_| {}).unwrap();
+        io.0 = kick.wrapping_add(1 << 31);
+        assert!(!own.check_watchdog(&mut io), "{kick}");
         assert!(
             !signals.check_watchdog(kick.wrapping_add(100_000)),
             "{kick}"
