@@ -2,7 +2,7 @@
 
 use regler_scan_cycle::{
     Breakpoint, Conditioning, Ctd, Ctu, Ctud, CycleConfig, DateTime, Executive, FTrig, Halt, Io,
-    MinuteTable, RTrig, Rs, Signals, Spool, Sr, Start, StepChain, TimerQueue, Tof, Ton, Tp,
+    MinuteTable, RTrig, Restart, Rs, Signals, Spool, Sr, Start, StepChain, TimerQueue, Tof, Ton, Tp,
     Weekdays,
 };
 
@@ -163,10 +163,35 @@ pub fn signals_trip_inside_a_cycle() -> Outcome {
     check!(r == Err(Halt::Watchdog));
     check!(plant.outputs == [0]);
     SIGNALS.power_fail();
-    SIGNALS.resume();
+    SIGNALS.resume(Restart::Inhibit);
     check!(SIGNALS.tripped());
     SIGNALS.reset_watchdog();
-    check!(plc.cycle_with(&mut plant, &SIGNALS, |_| {}).is_ok());
+    let mut previous_safe = false;
+    check!(plc
+        .cycle_with(&mut plant, &SIGNALS, |s| previous_safe = s.previous.words() == &[0])
+        .is_ok());
+    check!(previous_safe);
+    // The power fails while the program runs: nothing of this cycle reaches the outputs (the
+    // interrupt's handler writes the safe ones), and after a restart-inhibited resume the
+    // program starts from the safe outputs.
+    check!(plc
+        .cycle_with(&mut plant, &SIGNALS, |s| {
+            let _ = s.outputs.set(0, true);
+        })
+        .is_ok());
+    check!(plant.outputs == [1]);
+    let r = plc.cycle_with(&mut plant, &SIGNALS, |s| {
+        SIGNALS.power_fail(); // the power-fail interrupt
+        let _ = s.outputs.set(1, true);
+    });
+    check!(r == Err(Halt::PowerFail));
+    check!(plant.outputs == [1]); // the cycle wrote nothing
+    SIGNALS.resume(Restart::Inhibit);
+    previous_safe = false;
+    check!(plc
+        .cycle_with(&mut plant, &SIGNALS, |s| previous_safe = s.previous.words() == &[0])
+        .is_ok());
+    check!(previous_safe && plant.outputs == [0]);
     Ok(())
 }
 
@@ -228,7 +253,8 @@ pub fn step_chain_spool_and_breakpoints() -> Outcome {
         &on,
         |s| chain.run(s, &mut counts),
         |_, _| {},
-    );
+    )
+    .map_err(|_| "breakpoints")?;
     check!(why == Some(Halt::Breakpoint(Breakpoint::OutputOn(2))));
     let (n2, _) = plc.run(
         &mut plant,
@@ -236,7 +262,8 @@ pub fn step_chain_spool_and_breakpoints() -> Outcome {
         &on,
         |s| chain.run(s, &mut counts),
         |_, _| {},
-    );
+    )
+    .map_err(|_| "breakpoints")?;
     check!(n1 == 1 && n2 == 9); // on in cycles 1-2 and 10-12: the next edge is cycle 10
     check!(counts.seen == 10);
     // Level C: jobs in the reserve after a cycle; a full spool hands the job back.

@@ -44,7 +44,8 @@ pub struct CycleConfig<const OW: usize> {
     /// Cycle period, µs (the source: 50 ms).
     pub period_us: u32,
     /// A cycle that does not finish within this many µs of the last one trips the watchdog
-    /// (the source: 100 ms).
+    /// (the source: 100 ms). A limit above 2³¹ − 2 µs (35.8 minutes) acts as 2³¹ − 2 µs: a
+    /// longer time cannot be told from the clock stepping back.
     pub watchdog_us: u32,
     /// The outputs written on a watchdog trip or a power failure (the source: all off).
     pub safe_outputs: Image<OW>,
@@ -123,30 +124,87 @@ impl<const IW: usize, const OW: usize> BreakpointWatch<IW, OW> {
     }
 }
 
+/// Half the wrapping range of the µs clock: a reading this far or farther "ahead" of a
+/// reference is the clock stepping back.
+pub(crate) const HALF_RANGE_US: u32 = 1 << 31;
+
+/// The longest watchdog limit: one µs more must still read as time going forward.
+pub(crate) const MAX_WATCHDOG_US: u32 = HALF_RANGE_US - 2;
+
+/// The µs from `from` to `to` on the wrapping clock, or `None` when `to` is behind `from` (a
+/// wrapping difference of 2³¹ µs or more: the clock stepped back).
+fn forward_us(from: u32, to: u32) -> Option<u32> {
+    let d = to.wrapping_sub(from);
+    (d < HALF_RANGE_US).then_some(d)
+}
+
+/// How the program starts again after a power failure ([`Executive::resume`],
+/// [`Signals::resume`]).
+///
+/// EN 60204-1 (7.5) forbids a machine to restart by itself when the power returns where that
+/// could be dangerous: that is [`Restart::Inhibit`]. The previous output image is only part of
+/// what a program remembers — its own timers, counters and variables are its own, and a
+/// program that latches a run request there must clear it itself.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Restart {
+    /// The program starts from the safe outputs as its previous output image — what the plant
+    /// has after the outage: a sealed-in motor stays off until it is started again.
+    Inhibit,
+    /// The program starts from the output image of the last cycle before the outage, as the
+    /// source did: a sealed-in motor runs on by itself.
+    WhereStopped,
+}
+
 /// What supervises a cycle from outside it: nothing ([`Executive::cycle`]) or [`Signals`]
 /// ([`Executive::cycle_with`]).
-pub(crate) trait Supervision<const IW: usize> {
+pub(crate) trait Supervision<const IW: usize, const OW: usize> {
+    /// Whether cycles are refused now, and why.
     fn halted(&self) -> Option<Halt>;
-    fn take_captured(&self) -> Option<[u16; IW]>;
-    fn write_unless_tripped(&self, write: impl FnOnce()) -> bool;
-    fn kick(&self, now_us: u32);
+    /// At a cycle's start: the halt that refuses it, or the state to run it from.
+    fn begin(&self) -> Result<Begin<IW>, Halt>;
+    /// Before the output write: no trip or power failure since `events` was taken.
+    fn commit(&self, events: u32) -> Result<(), Halt>;
+    /// After the output write, in one step: no trip or power failure since the start, and the
+    /// watchdog kicked at `end_us`.
+    fn confirm(&self, events: u32, end_us: u32) -> Result<(), Halt>;
+    /// The outputs the interrupt handlers write on a halt.
+    fn safe_outputs(&self) -> Option<&Image<OW>>;
+}
+
+/// What a supervised cycle starts from.
+pub(crate) struct Begin<const IW: usize> {
+    /// The count of trips and power failures so far.
+    pub(crate) events: u32,
+    /// Inputs latched by the interrupt since the last cycle.
+    pub(crate) captured: Option<[u16; IW]>,
+    /// The plant has the safe outputs: the program starts from them.
+    pub(crate) restart_from_safe: bool,
 }
 
 /// No supervision: the executive's own watchdog and flags only.
 struct Unsupervised;
 
-impl<const IW: usize> Supervision<IW> for Unsupervised {
+impl<const IW: usize, const OW: usize> Supervision<IW, OW> for Unsupervised {
     fn halted(&self) -> Option<Halt> {
         None
     }
-    fn take_captured(&self) -> Option<[u16; IW]> {
+    fn begin(&self) -> Result<Begin<IW>, Halt> {
+        Ok(Begin {
+            events: 0,
+            captured: None,
+            restart_from_safe: false,
+        })
+    }
+    fn commit(&self, _events: u32) -> Result<(), Halt> {
+        Ok(())
+    }
+    fn confirm(&self, _events: u32, _end_us: u32) -> Result<(), Halt> {
+        Ok(())
+    }
+    fn safe_outputs(&self) -> Option<&Image<OW>> {
         None
     }
-    fn write_unless_tripped(&self, write: impl FnOnce()) -> bool {
-        write();
-        true
-    }
-    fn kick(&self, _now_us: u32) {}
 }
 
 impl fmt::Display for Breakpoint {
@@ -159,6 +217,52 @@ impl fmt::Display for Breakpoint {
         }
     }
 }
+
+/// A breakpoint that could never fire, refused by the monitor's run commands and
+/// [`Executive::check_breakpoints`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum BreakpointError {
+    /// `Breakpoint::Cycle(0)`: cycles are numbered from 1.
+    CycleZero,
+    /// An input point the executive does not have.
+    NoSuchInput {
+        /// The point asked for.
+        point: usize,
+        /// Input points there are (0 to `inputs − 1`).
+        inputs: usize,
+    },
+    /// An output point the executive does not have.
+    NoSuchOutput {
+        /// The point asked for.
+        point: usize,
+        /// Output points there are (0 to `outputs − 1`).
+        outputs: usize,
+    },
+}
+
+impl fmt::Display for BreakpointError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            BreakpointError::CycleZero => {
+                f.write_str("breakpoint at cycle 0 can never fire: cycles are numbered from 1")
+            }
+            BreakpointError::NoSuchInput { point, inputs } => write!(
+                f,
+                "breakpoint on input {point} can never fire: there are {inputs} inputs (0 to {})",
+                inputs.saturating_sub(1)
+            ),
+            BreakpointError::NoSuchOutput { point, outputs } => write!(
+                f,
+                "breakpoint on output {point} can never fire: there are {outputs} outputs (0 to {})",
+                outputs.saturating_sub(1)
+            ),
+        }
+    }
+}
+
+impl core::error::Error for BreakpointError {}
 
 /// Cycle statistics, as the source measured its load. Before the first cycle `min_us` is
 /// `u32::MAX` (no cycle yet), in [`CycleStats::NONE`], [`Default`] and a new executive alike.
@@ -330,6 +434,8 @@ pub struct Executive<const IW: usize, const OW: usize> {
     clock_last_us: Option<u32>,
     last_end_us: Option<u32>,
     watchdog_trips: u32,
+    /// The count of `Signals` trips and power failures the last cycle started with.
+    seen_events: u32,
 }
 
 impl<const IW: usize, const OW: usize> Executive<IW, OW> {
@@ -353,6 +459,7 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
             last_start_us: None,
             last_end_us: None,
             watchdog_trips: 0,
+            seen_events: 0,
             clock_ms: 0,
             clock_rest_us: 0,
             clock_last_us: None,
@@ -371,10 +478,21 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
     /// One cycle with `program`, supervised through `signals`, whose watchdog, latch capture and
     /// power failure live with the interrupts (see [`Signals`]). Refused while `signals` says the
     /// power has failed or the watchdog has tripped. The inputs latched by
-    /// [`Signals::capture`] since the last cycle are read; if the watchdog trips while the program
-    /// runs (from its interrupt), the cycle writes no outputs — the safe outputs stand — and
-    /// returns [`Halt::Watchdog`]. Checking the trip and writing the outputs happen in one
-    /// critical section, so an interrupt cannot slip between them.
+    /// [`Signals::capture`] since the last cycle are read.
+    ///
+    /// If the watchdog trips or the power fails at any moment after the cycle's start — while
+    /// it reads, while the program runs, before, during or after the output write — the cycle
+    /// returns the halt ([`Halt::Watchdog`], [`Halt::PowerFail`]) and the safe outputs are the
+    /// last thing written: a halt before the write leaves the write out, one during or after it
+    /// makes the cycle write [`Signals::safe_outputs`] once more after its own write. Such a
+    /// cycle is not counted ([`cycle_count`](Executive::cycle_count), statistics, images and
+    /// [`Io::kick_watchdog`] as before it). The check before the write and the check after it
+    /// are each a few word operations in a critical section; the bus write itself runs with
+    /// interrupts on.
+    ///
+    /// After a trip, or a power failure resumed with [`Restart::Inhibit`], the next cycle's
+    /// previous output image is the safe outputs; after any trip or power failure the gap until
+    /// the next cycle is not program time (see [`now_ms`](Executive::now_ms)).
     pub fn cycle_with<I: Io<IW, OW>>(
         &mut self,
         io: &mut I,
@@ -386,21 +504,34 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
 
     /// The cycle, supervised by `signals` or by nothing: generic, so a firmware that never uses
     /// [`Signals`] links no critical-section code and needs no critical-section implementation.
-    fn run_cycle<I: Io<IW, OW>, S: Supervision<IW>>(
+    fn run_cycle<I: Io<IW, OW>, S: Supervision<IW, OW>>(
         &mut self,
         io: &mut I,
         signals: &S,
         program: impl FnOnce(&mut Scan<'_, IW, OW>),
     ) -> Result<(), Halt> {
-        if let Some(halt) = self.halted().or_else(|| signals.halted()) {
+        if let Some(halt) = self.halted() {
             return Err(halt);
         }
-        if let Some(captured) = signals.take_captured() {
+        let begin = signals.begin()?;
+        if begin.events != self.seen_events {
+            // A trip or a power failure since the last cycle: the halt is not program time,
+            // nor jitter.
+            self.seen_events = begin.events;
+            self.clock_last_us = None;
+            self.last_start_us = None;
+        }
+        if begin.restart_from_safe
+            && let Some(safe) = signals.safe_outputs()
+        {
+            self.previous = *safe;
+        }
+        if let Some(captured) = begin.captured {
             self.conditioning.capture(&captured);
         }
         let start = io.now_us();
-        if let Some(last) = self.last_start_us {
-            let jitter = start.wrapping_sub(last).abs_diff(self.config.period_us);
+        if let Some(interval) = self.last_start_us.and_then(|last| forward_us(last, start)) {
+            let jitter = interval.abs_diff(self.config.period_us);
             self.stats.jitter_us = self.stats.jitter_us.max(jitter);
         }
         self.last_start_us = Some(start);
@@ -410,27 +541,34 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         self.force_inputs.apply(&mut self.inputs);
         // Level B: the program, on the images only.
         self.next = self.previous;
-        self.cycle = self.cycle.saturating_add(1);
+        let cycle = self.cycle.saturating_add(1);
         let now_ms = self.tick_clock(start);
         program(&mut Scan {
             inputs: &self.inputs,
             previous: &self.previous,
             outputs: &mut self.next,
-            cycle: self.cycle,
+            cycle,
             now_ms,
         });
         self.force_outputs.apply(&mut self.next);
-        // Level A: all outputs out, images swapped.
-        let next = &self.next;
-        if !signals.write_unless_tripped(|| io.write_outputs(next.words())) {
-            return Err(Halt::Watchdog);
+        // Level A: all outputs out, images swapped. The write runs with interrupts on; a halt
+        // that came before it leaves it out, one during or after it is answered by writing
+        // the safe outputs again, so they are the last thing on the bus either way.
+        signals.commit(begin.events)?;
+        io.write_outputs(self.next.words());
+        let end = io.now_us();
+        if let Err(halt) = signals.confirm(begin.events, end) {
+            if let Some(safe) = signals.safe_outputs() {
+                io.write_outputs(safe.words());
+            }
+            return Err(halt);
         }
         io.kick_watchdog();
+        self.cycle = cycle;
         self.previous = self.next;
-        let end = io.now_us();
-        signals.kick(end);
         self.last_end_us = Some(end);
-        let busy = end.wrapping_sub(start);
+        // A clock that stepped back inside the cycle counts it as 0 µs busy.
+        let busy = forward_us(start, end).unwrap_or(0);
         let s = &mut self.stats;
         s.cycles = s.cycles.saturating_add(1);
         s.last_us = busy;
@@ -443,31 +581,74 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         Ok(())
     }
 
-    /// Advances the program's millisecond clock by the µs elapsed since the last cycle.
+    /// Advances the program's millisecond clock by the µs elapsed since the last cycle; a
+    /// reading behind the last one (the clock stepped back) adds nothing and the last reading
+    /// stays the reference.
     fn tick_clock(&mut self, now_us: u32) -> u32 {
-        if let Some(last) = self.clock_last_us {
-            let total =
-                u64::from(self.clock_rest_us).saturating_add(u64::from(now_us.wrapping_sub(last)));
-            let ms = u32::try_from(total / 1000).unwrap_or(u32::MAX);
-            self.clock_ms = self.clock_ms.wrapping_add(ms);
-            self.clock_rest_us = u32::try_from(total % 1000).unwrap_or(0);
+        match self.clock_last_us {
+            Some(last) => {
+                if let Some(step) = forward_us(last, now_us) {
+                    let total = u64::from(self.clock_rest_us).saturating_add(u64::from(step));
+                    let ms = u32::try_from(total / 1000).unwrap_or(u32::MAX);
+                    self.clock_ms = self.clock_ms.wrapping_add(ms);
+                    self.clock_rest_us = u32::try_from(total % 1000).unwrap_or(0);
+                    self.clock_last_us = Some(now_us);
+                }
+            }
+            None => self.clock_last_us = Some(now_us),
         }
-        self.clock_last_us = Some(now_us);
         self.clock_ms
     }
 
-    /// The program's millisecond clock at the start of the last cycle (wrapping at 2³² ms). It
-    /// stands still while the power is off: timers resume where they were.
+    /// The program's millisecond clock at the start of the last cycle (wrapping at 2³² ms),
+    /// also [`Scan::now_ms`].
+    ///
+    /// It counts the `Io` clock's µs between cycle starts, carried exactly across the µs
+    /// clock's wrap. A reading 2³¹ µs or more (35.8 minutes) ahead of the last one, wrapping,
+    /// is the clock stepping back (a µs counter built from a 16-bit timer and an overflow
+    /// interrupt does, for a moment): it adds no time, and the clock counts on from the last
+    /// reading before it. So a gap between two cycles counts only if it is under 2³¹ µs: a
+    /// `u32` µs clock cannot tell a longer one from a shorter one. Halts do not count: after a
+    /// power failure or a watchdog trip (of the executive or of [`Signals`]) the clock goes on
+    /// from where it stood at the last cycle's start, however long the halt lasted — timers
+    /// resume where they were.
     #[must_use]
     pub const fn now_ms(&self) -> u32 {
         self.clock_ms
     }
 
     /// Level C, the performance reserve: runs spool jobs while the next cycle is more than
-    /// `margin_us` away, then returns the jobs run. A job is never started without room left.
+    /// `margin_us` away, then returns the jobs run. A job is never started without room left,
+    /// nor while the power has failed or the watchdog is tripped (use
+    /// [`reserve_with`](Executive::reserve_with) when [`Signals`] has them). A clock that
+    /// stepped back since the cycle's start leaves no room.
     pub fn reserve<I: Io<IW, OW>, J, const S: usize>(
         &mut self,
         io: &mut I,
+        spool: &mut Spool<J, S>,
+        margin_us: u32,
+        run: impl FnMut(J),
+    ) -> usize {
+        self.run_reserve(io, &Unsupervised, spool, margin_us, run)
+    }
+
+    /// [`reserve`](Executive::reserve) under `signals`: no job starts while `signals` says the
+    /// power has failed or the watchdog has tripped (checked before each job).
+    pub fn reserve_with<I: Io<IW, OW>, J, const S: usize>(
+        &mut self,
+        io: &mut I,
+        signals: &Signals<IW, OW>,
+        spool: &mut Spool<J, S>,
+        margin_us: u32,
+        run: impl FnMut(J),
+    ) -> usize {
+        self.run_reserve(io, signals, spool, margin_us, run)
+    }
+
+    fn run_reserve<I: Io<IW, OW>, V: Supervision<IW, OW>, J, const S: usize>(
+        &mut self,
+        io: &mut I,
+        signals: &V,
         spool: &mut Spool<J, S>,
         margin_us: u32,
         mut run: impl FnMut(J),
@@ -477,7 +658,10 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         };
         let deadline = self.config.period_us.saturating_sub(margin_us);
         let mut done = 0usize;
-        while io.now_us().wrapping_sub(start) < deadline {
+        while self.halted().is_none()
+            && signals.halted().is_none()
+            && forward_us(start, io.now_us()).is_some_and(|d| d < deadline)
+        {
             let Some(job) = spool.pop() else { break };
             run(job);
             done = done.saturating_add(1);
@@ -489,10 +673,13 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         done
     }
 
-    /// Checks the watchdog from the same context as the cycles (the idle loop): if no cycle has
-    /// finished within the limit — counted from the first check when none has finished yet —
-    /// the safe outputs are written and cycles are refused. Returns whether the watchdog is
-    /// (now) tripped.
+    /// Checks the watchdog from the same context as the cycles (the idle loop): if the `Io`
+    /// clock is more than the limit past the end of the last cycle — counted from the first
+    /// check when none has finished yet — the safe outputs are written, they become the output
+    /// image (the program's previous image after the reset), and cycles are refused. Returns
+    /// whether the watchdog is (now) tripped. A reading 2³¹ µs or more behind the last cycle's
+    /// end (a clock stepping back) does not trip it; a limit above 2³¹ − 2 µs acts as
+    /// 2³¹ − 2 µs.
     ///
     /// This sees a hang only between cycles, since [`cycle`](Executive::cycle) holds the
     /// executive; to catch a program that hangs inside a cycle, check from a timer interrupt
@@ -513,8 +700,10 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
                 return false;
             }
         };
-        if now.wrapping_sub(since) > self.config.watchdog_us {
+        let limit = self.config.watchdog_us.min(MAX_WATCHDOG_US);
+        if forward_us(since, now).is_some_and(|d| d > limit) {
             io.write_outputs(self.config.safe_outputs.words());
+            self.previous = self.config.safe_outputs;
             self.tripped = true;
             self.watchdog_trips = self.watchdog_trips.saturating_add(1);
             return true;
@@ -522,13 +711,15 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         false
     }
 
-    /// The operator has looked at the trip: cycles may run again (the watchdog re-arms at the
-    /// next check).
+    /// The operator has looked at the trip: cycles may run again from the safe outputs as the
+    /// previous output image; the watchdog re-arms at the next check, and the time tripped is
+    /// not program time. A reset while the watchdog has not tripped does nothing.
     pub fn reset_watchdog(&mut self) {
         if self.tripped {
             self.tripped = false;
             self.last_end_us = None;
             self.last_start_us = None;
+            self.clock_last_us = None;
             self.watch_from_us = None;
         }
     }
@@ -542,17 +733,24 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         self.power_failed = true;
     }
 
-    /// Power is back: the next cycle continues where the last one left off, with the inputs
-    /// latched meanwhile. The outage is not counted as jitter, nor as time for the program's
-    /// timers: they resume where they stood. A watchdog that had tripped stays tripped until
+    /// Power is back: the next cycle reads the inputs latched meanwhile and starts from the
+    /// previous output image `restart` says — [`Restart::Inhibit`]: the safe outputs the plant
+    /// has (what EN 60204-1 asks for: a sealed-in motor stays off), [`Restart::WhereStopped`]:
+    /// the image of the last cycle before the outage (the source's behaviour: it runs on). The
+    /// outage is not counted as jitter, nor as time for the program's timers: they resume
+    /// where they stood. A watchdog that had tripped stays tripped until
     /// [`reset_watchdog`](Executive::reset_watchdog): a power cycle is not an operator's reset.
-    pub fn resume(&mut self) {
+    /// Without a power failure this does nothing.
+    pub fn resume(&mut self, restart: Restart) {
         if self.power_failed {
             self.power_failed = false;
             self.last_start_us = None;
             self.last_end_us = None;
             self.clock_last_us = None;
             self.watch_from_us = None;
+            if restart == Restart::Inhibit {
+                self.previous = self.config.safe_outputs;
+            }
         }
     }
 
@@ -604,7 +802,10 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         &self.inputs
     }
 
-    /// The output image written at the end of the last cycle.
+    /// The output image the plant has: written at the end of the last cycle, or the safe
+    /// outputs after a trip of [`check_watchdog`](Executive::check_watchdog) or a
+    /// [`Restart::Inhibit`] resume (after a [`Signals`] trip or outage, from the next
+    /// [`cycle_with`](Executive::cycle_with) that runs). The next cycle's previous image.
     #[must_use]
     pub const fn outputs(&self) -> &Image<OW> {
         &self.previous
@@ -622,7 +823,7 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         &self.stats
     }
 
-    /// Cycles run.
+    /// Cycles run to the end (a cycle a halt overtook is not counted), as `stats().cycles`.
     #[must_use]
     pub const fn cycle_count(&self) -> u64 {
         self.cycle
@@ -680,9 +881,31 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         }
     }
 
+    /// Refuses breakpoints that could never fire: `Cycle(0)` (cycles are numbered from 1) and
+    /// points beyond the images (`16 × IW` inputs, `16 × OW` outputs).
+    pub fn check_breakpoints(&self, breakpoints: &[Breakpoint]) -> Result<(), BreakpointError> {
+        let inputs = Image::<IW>::POINTS;
+        let outputs = Image::<OW>::POINTS;
+        for &b in breakpoints {
+            match b {
+                Breakpoint::Cycle(0) => return Err(BreakpointError::CycleZero),
+                Breakpoint::InputOn(point) if point >= inputs => {
+                    return Err(BreakpointError::NoSuchInput { point, inputs });
+                }
+                Breakpoint::OutputOn(point) | Breakpoint::OutputOff(point) if point >= outputs => {
+                    return Err(BreakpointError::NoSuchOutput { point, outputs });
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
     /// The monitor's run command: up to `cycles` cycles (`u64::MAX`: continuous), stopping after
-    /// the first cycle in which one of `breakpoints` comes to hold (it did not before the cycle). `between` runs after every cycle (the
-    /// reserve, the plant simulation). Returns the cycles run and why the run stopped early.
+    /// the first cycle in which one of `breakpoints` comes to hold (it did not before the
+    /// cycle). `between` runs after every cycle (the reserve, the plant simulation). Returns the
+    /// cycles run and why the run stopped early, or refuses breakpoints that could never fire
+    /// ([`check_breakpoints`](Executive::check_breakpoints)) before running any cycle.
     pub fn run<I: Io<IW, OW>, P: FnMut(&mut Scan<'_, IW, OW>)>(
         &mut self,
         io: &mut I,
@@ -690,9 +913,17 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         breakpoints: &[Breakpoint],
         program: P,
         between: impl FnMut(&mut Self, &mut I),
-    ) -> (u64, Option<Halt>) {
-        let (done, halt, _) = self.run_until(io, cycles, breakpoints, program, between, |_| false);
-        (done, halt)
+    ) -> Result<(u64, Option<Halt>), BreakpointError> {
+        let (done, halt, _) = self.monitor(
+            io,
+            &Unsupervised,
+            cycles,
+            breakpoints,
+            program,
+            between,
+            |_| false,
+        )?;
+        Ok((done, halt))
     }
 
     /// [`run`](Executive::run) with a condition breakpoint as well: `stop` is asked after every
@@ -703,27 +934,90 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         io: &mut I,
         cycles: u64,
         breakpoints: &[Breakpoint],
+        program: P,
+        between: impl FnMut(&mut Self, &mut I),
+        stop: impl FnMut(&Self) -> bool,
+    ) -> Result<(u64, Option<Halt>, bool), BreakpointError> {
+        self.monitor(
+            io,
+            &Unsupervised,
+            cycles,
+            breakpoints,
+            program,
+            between,
+            stop,
+        )
+    }
+
+    /// [`run`](Executive::run) with every cycle run by [`cycle_with`](Executive::cycle_with)
+    /// under `signals`: the run stops with the halt when the watchdog trips or the power fails
+    /// (it writes nothing while they last), and every cycle kicks the watchdog.
+    pub fn run_with<I: Io<IW, OW>, P: FnMut(&mut Scan<'_, IW, OW>)>(
+        &mut self,
+        io: &mut I,
+        signals: &Signals<IW, OW>,
+        cycles: u64,
+        breakpoints: &[Breakpoint],
+        program: P,
+        between: impl FnMut(&mut Self, &mut I),
+    ) -> Result<(u64, Option<Halt>), BreakpointError> {
+        let (done, halt, _) =
+            self.monitor(io, signals, cycles, breakpoints, program, between, |_| {
+                false
+            })?;
+        Ok((done, halt))
+    }
+
+    /// [`run_until`](Executive::run_until) under `signals`, as [`run_with`](Executive::run_with).
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "run_until's arguments and the Signals; a struct would hide the closures' types"
+    )]
+    pub fn run_until_with<I: Io<IW, OW>, P: FnMut(&mut Scan<'_, IW, OW>)>(
+        &mut self,
+        io: &mut I,
+        signals: &Signals<IW, OW>,
+        cycles: u64,
+        breakpoints: &[Breakpoint],
+        program: P,
+        between: impl FnMut(&mut Self, &mut I),
+        stop: impl FnMut(&Self) -> bool,
+    ) -> Result<(u64, Option<Halt>, bool), BreakpointError> {
+        self.monitor(io, signals, cycles, breakpoints, program, between, stop)
+    }
+
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the run commands' arguments, passed through"
+    )]
+    fn monitor<I: Io<IW, OW>, V: Supervision<IW, OW>, P: FnMut(&mut Scan<'_, IW, OW>)>(
+        &mut self,
+        io: &mut I,
+        signals: &V,
+        cycles: u64,
+        breakpoints: &[Breakpoint],
         mut program: P,
         mut between: impl FnMut(&mut Self, &mut I),
         mut stop: impl FnMut(&Self) -> bool,
-    ) -> (u64, Option<Halt>, bool) {
+    ) -> Result<(u64, Option<Halt>, bool), BreakpointError> {
+        self.check_breakpoints(breakpoints)?;
         let mut done = 0u64;
         while done < cycles {
             // The images before the cycle, to see which breakpoints come to hold in it.
             let watch = self.watch();
-            if let Err(halt) = self.cycle(io, &mut program) {
-                return (done, Some(halt), false);
+            if let Err(halt) = self.run_cycle(io, signals, &mut program) {
+                return Ok((done, Some(halt), false));
             }
             done = done.saturating_add(1);
             between(self, io);
             if let Some(b) = watch.fired(self, breakpoints) {
-                return (done, Some(Halt::Breakpoint(b)), false);
+                return Ok((done, Some(Halt::Breakpoint(b)), false));
             }
             if stop(self) {
-                return (done, None, true);
+                return Ok((done, None, true));
             }
         }
-        (done, None, false)
+        Ok((done, None, false))
     }
 }
 
@@ -916,7 +1210,7 @@ mod tests {
         assert_eq!(plc.halted(), Some(Halt::PowerFail));
         assert_eq!(plc.cycle(&mut io, |_| {}), Err(Halt::PowerFail));
         plc.capture(&[1 << 5, 0]); // a pulse during the outage
-        plc.resume();
+        plc.resume(Restart::WhereStopped);
         plc.cycle(&mut io, |s| {
             assert!(s.inputs.get(5), "latched during the outage");
             assert!(s.previous.get(1), "output image kept");
@@ -982,41 +1276,49 @@ mod tests {
     #[test]
     fn run_stops_at_breakpoints() {
         let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(CycleConfig::source()));
-        let (n, why) = plc.run(&mut io, 10, &[Breakpoint::Cycle(4)], |_| {}, |_, _| {});
+        let (n, why) = plc
+            .run(&mut io, 10, &[Breakpoint::Cycle(4)], |_| {}, |_, _| {})
+            .unwrap();
         assert_eq!((n, why), (4, Some(Halt::Breakpoint(Breakpoint::Cycle(4)))));
         let program = |s: &mut Scan<'_, 2, 1>| {
             s.outputs.set(2, s.cycle.is_multiple_of(3)).unwrap();
         };
-        let (n, why) = plc.run(
-            &mut io,
-            u64::MAX,
-            &[Breakpoint::OutputOn(2)],
-            program,
-            |_, _| {},
-        );
+        let (n, why) = plc
+            .run(
+                &mut io,
+                u64::MAX,
+                &[Breakpoint::OutputOn(2)],
+                program,
+                |_, _| {},
+            )
+            .unwrap();
         assert_eq!(
             (n, why),
             (2, Some(Halt::Breakpoint(Breakpoint::OutputOn(2))))
         );
-        let (n, why) = plc.run(&mut io, 3, &[], program, |_, _| {});
+        let (n, why) = plc.run(&mut io, 3, &[], program, |_, _| {}).unwrap();
         assert_eq!((n, why), (3, None));
         // A breakpoint passed is not hit again at once: the cycle breakpoint fires once, and
         // `cont` runs on from an output breakpoint to its next rising edge.
-        let (n, why) = plc.run(&mut io, 5, &[Breakpoint::Cycle(4)], program, |_, _| {});
+        let (n, why) = plc
+            .run(&mut io, 5, &[Breakpoint::Cycle(4)], program, |_, _| {})
+            .unwrap();
         assert_eq!((n, why), (5, None));
         // A condition breakpoint: both outputs 0 and 2 on.
         let both = |s: &mut Scan<'_, 2, 1>| {
             s.outputs.set(0, s.cycle.is_multiple_of(2)).unwrap();
             s.outputs.set(2, s.cycle.is_multiple_of(5)).unwrap();
         };
-        let (_, why, by_condition) = plc.run_until(
-            &mut io,
-            100,
-            &[],
-            both,
-            |_, _| {},
-            |p| p.outputs().get(0) && p.outputs().get(2),
-        );
+        let (_, why, by_condition) = plc
+            .run_until(
+                &mut io,
+                100,
+                &[],
+                both,
+                |_, _| {},
+                |p| p.outputs().get(0) && p.outputs().get(2),
+            )
+            .unwrap();
         assert!(by_condition && why.is_none());
         assert!(plc.cycle_count().is_multiple_of(10));
     }
@@ -1031,7 +1333,7 @@ mod tests {
         assert!(plc.check_watchdog(&mut io)); // 120 ms
         plc.power_fail(&mut io);
         assert_eq!(plc.halted(), Some(Halt::PowerFail));
-        plc.resume();
+        plc.resume(Restart::WhereStopped);
         assert_eq!(
             plc.halted(),
             Some(Halt::Watchdog),
@@ -1063,7 +1365,7 @@ mod tests {
             plc.cycle_with(&mut io, &signals, |_| {}),
             Err(Halt::PowerFail)
         );
-        signals.resume();
+        signals.resume(Restart::WhereStopped);
         assert_eq!(
             plc.cycle_with(&mut io, &signals, |_| {}),
             Err(Halt::Watchdog)
@@ -1074,7 +1376,7 @@ mod tests {
         // Nothing trips while the power is off.
         signals.power_fail();
         assert!(!signals.check_watchdog(u32::MAX));
-        signals.resume();
+        signals.resume(Restart::WhereStopped);
         assert!(!signals.check_watchdog(0), "re-armed from this check");
         assert!(signals.check_watchdog(100_001));
     }
@@ -1137,12 +1439,12 @@ mod tests {
         let on = [Breakpoint::OutputOn(2)];
         let mut stops = Vec::new();
         for _ in 0..3 {
-            plc.run(&mut io, 100, &on, program, |_, _| {});
+            plc.run(&mut io, 100, &on, program, |_, _| {}).unwrap();
             stops.push(plc.cycle_count());
         }
         assert_eq!(stops, [3, 13, 23], "level-triggered would stop at 3, 4, 5");
         let off = [Breakpoint::OutputOff(2)];
-        plc.run(&mut io, 100, &off, program, |_, _| {});
+        plc.run(&mut io, 100, &off, program, |_, _| {}).unwrap();
         assert_eq!(plc.cycle_count(), 26);
     }
 }

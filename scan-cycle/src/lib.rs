@@ -23,8 +23,8 @@ pub use calendar::{
     AddError, Checked, DateTime, Due, InvalidDateTime, MinuteTable, Start, Weekdays,
 };
 pub use executive::{
-    Breakpoint, BreakpointWatch, Condition, CycleConfig, CycleStats, Executive, Halt, Io, Routine,
-    Scan, Spool, StepChain,
+    Breakpoint, BreakpointError, BreakpointWatch, Condition, CycleConfig, CycleStats, Executive,
+    Halt, Io, Restart, Routine, Scan, Spool, StepChain,
 };
 pub use image::{
     Conditioning, DebounceError, Forcing, Image, POINTS_PER_WORD, PointError, WordError,

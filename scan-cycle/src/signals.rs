@@ -5,7 +5,9 @@ use core::cell::Cell;
 
 use critical_section::Mutex;
 
-use crate::executive::{CycleConfig, Halt, Supervision};
+use crate::executive::{
+    Begin, CycleConfig, HALF_RANGE_US, Halt, MAX_WATCHDOG_US, Restart, Supervision,
+};
 use crate::image::Image;
 
 #[derive(Clone, Copy)]
@@ -16,6 +18,14 @@ struct Shared<const IW: usize> {
     tripped: bool,
     power_failed: bool,
     trips: u32,
+    /// Trips and power failures so far (wrapping): a cycle that sees it change between its
+    /// start and its end has been overtaken by a halt.
+    events: u32,
+    /// The last of those events.
+    last_event: Halt,
+    /// The plant has the safe outputs and the program must start from them (a trip, or a
+    /// power failure resumed with [`Restart::Inhibit`]); taken by the next cycle.
+    restart_from_safe: bool,
 }
 
 /// The executive's supervision as interrupt handlers need it: every method takes `&self`, so a
@@ -29,10 +39,19 @@ struct Shared<const IW: usize> {
 /// and trips while the program is stuck inside a cycle.
 ///
 /// The state lives in a [`critical_section::Mutex`]; each call holds the critical section for a
-/// few word operations (`capture` for one OR per input word). The firmware provides the critical
-/// section implementation, as for any embedded crate built on `critical-section` (on a
-/// single-core Cortex-M: `cortex-m`'s `critical-section-single-core` feature; on a host:
-/// `critical-section`'s `std` feature). No `unsafe` here.
+/// few word operations (`capture` for one OR per input word). The executive's own bus write is
+/// never inside it: the cycle checks and commits in one section, writes the outputs with
+/// interrupts on, and checks again in a second section; a trip or a power failure that came in
+/// between makes the main context write the safe outputs once more after its own write, so
+/// whatever the moment of the interrupt, the safe outputs are the last thing written and the
+/// cycle returns the halt. A bus write that never returns is caught by the timer interrupt
+/// (the watchdog trips and its handler writes the safe outputs, if the bus lets it) and by the
+/// hardware watchdog, which [`Io::kick_watchdog`](crate::Io::kick_watchdog) pulses only after a
+/// cycle's write has returned and been confirmed.
+///
+/// The firmware provides the critical section implementation, as for any embedded crate built on
+/// `critical-section` (on a single-core Cortex-M: `cortex-m`'s `critical-section-single-core`
+/// feature; on a host: `critical-section`'s `std` feature). No `unsafe` here.
 ///
 /// ```
 /// use regler_scan_cycle::{CycleConfig, Executive, Halt, Io, Signals};
@@ -68,9 +87,15 @@ pub struct Signals<const IW: usize, const OW: usize> {
 
 impl<const IW: usize, const OW: usize> Signals<IW, OW> {
     /// Supervision with `config`'s watchdog limit and safe outputs. A `const fn`, for a
-    /// `static`.
+    /// `static`. A limit above 2³¹ − 2 µs (35.8 minutes) acts as 2³¹ − 2 µs: a longer time
+    /// cannot be told from a clock stepping back.
     #[must_use]
     pub const fn new(config: &CycleConfig<OW>) -> Signals<IW, OW> {
+        let limit = if config.watchdog_us <= MAX_WATCHDOG_US {
+            config.watchdog_us
+        } else {
+            MAX_WATCHDOG_US
+        };
         Signals {
             shared: Mutex::new(Cell::new(Shared {
                 captured: [0; IW],
@@ -78,8 +103,11 @@ impl<const IW: usize, const OW: usize> Signals<IW, OW> {
                 tripped: false,
                 power_failed: false,
                 trips: 0,
+                events: 0,
+                last_event: Halt::Watchdog,
+                restart_from_safe: false,
             })),
-            watchdog_us: config.watchdog_us,
+            watchdog_us: limit,
             safe_outputs: config.safe_outputs,
         }
     }
@@ -99,10 +127,16 @@ impl<const IW: usize, const OW: usize> Signals<IW, OW> {
     }
 
     /// From the timer interrupt, with the time now in µs (the [`Io`](crate::Io) clock): trips
-    /// the watchdog when no cycle has finished within the limit — counted from the first check
-    /// while none has, so a program that never completes a cycle trips it too. Returns `true`
-    /// when it trips now: the handler must then write [`safe_outputs`](Signals::safe_outputs).
-    /// A power failure is not a hang: while it lasts nothing trips.
+    /// the watchdog when the clock is more than the limit past the end of the last cycle —
+    /// counted from the first check while no cycle has finished, so a program that never
+    /// completes a cycle trips it too. Returns `true` when it trips now: the handler must then
+    /// write [`safe_outputs`](Signals::safe_outputs). A power failure is not a hang: while it
+    /// lasts nothing trips.
+    ///
+    /// A reading 2³¹ µs or more behind the last cycle's end (wrapping) is a clock stepping back,
+    /// or a time the handler read just before the cycle ended: it never trips, and the watchdog
+    /// goes on counting from the cycle's end (a clock that stepped back by d holds the trip off
+    /// for d; the hardware watchdog covers a clock that is wrong for longer).
     pub fn check_watchdog(&self, now_us: u32) -> bool {
         let limit = self.watchdog_us;
         self.update(|s| {
@@ -114,12 +148,19 @@ impl<const IW: usize, const OW: usize> Signals<IW, OW> {
                     s.kicked_us = Some(now_us);
                     false
                 }
-                Some(kicked) if now_us.wrapping_sub(kicked) > limit => {
-                    s.tripped = true;
-                    s.trips = s.trips.saturating_add(1);
-                    true
+                Some(kicked) => {
+                    let since = now_us.wrapping_sub(kicked);
+                    if since > limit && since < HALF_RANGE_US {
+                        s.tripped = true;
+                        s.trips = s.trips.saturating_add(1);
+                        s.events = s.events.wrapping_add(1);
+                        s.last_event = Halt::Watchdog;
+                        s.restart_from_safe = true;
+                        true
+                    } else {
+                        false
+                    }
                 }
-                Some(_) => false,
             }
         })
     }
@@ -136,27 +177,45 @@ impl<const IW: usize, const OW: usize> Signals<IW, OW> {
         });
     }
 
-    /// From the power-fail interrupt: cycles are refused until [`resume`](Signals::resume).
-    /// The handler writes [`safe_outputs`](Signals::safe_outputs). A watchdog trip stays.
+    /// From the power-fail interrupt: from this moment no cycle writes outputs — one running
+    /// now writes the safe outputs again after its own write and returns [`Halt::PowerFail`] —
+    /// and cycles are refused until [`resume`](Signals::resume). The handler writes
+    /// [`safe_outputs`](Signals::safe_outputs). A watchdog trip stays.
     pub fn power_fail(&self) {
-        self.update(|s| s.power_failed = true);
-    }
-
-    /// Power is back: cycles may run again (unless the watchdog had tripped: a power cycle is
-    /// not an operator's reset). The watchdog re-arms at its next check.
-    pub fn resume(&self) {
         self.update(|s| {
-            s.power_failed = false;
-            s.kicked_us = None;
+            s.power_failed = true;
+            s.events = s.events.wrapping_add(1);
+            s.last_event = Halt::PowerFail;
         });
     }
 
-    /// The operator has looked at the trip: cycles may run again; the watchdog re-arms at its
-    /// next check.
+    /// Power is back: cycles may run again (unless the watchdog had tripped: a power cycle is
+    /// not an operator's reset), starting from the previous output image `restart` says —
+    /// [`Restart::Inhibit`] (what EN 60204-1 asks for) or [`Restart::WhereStopped`]. The
+    /// outage is not program time: the executive's clock goes on from where it stood. The
+    /// watchdog re-arms at its next check. Without a power failure this does nothing.
+    pub fn resume(&self, restart: Restart) {
+        self.update(|s| {
+            if s.power_failed {
+                s.power_failed = false;
+                s.kicked_us = None;
+                if restart == Restart::Inhibit {
+                    s.restart_from_safe = true;
+                }
+            }
+        });
+    }
+
+    /// The operator has looked at the trip: cycles may run again, starting from the safe
+    /// outputs as the previous output image; the watchdog re-arms at its next check. A reset
+    /// while the watchdog has not tripped does nothing (a bouncing reset key does not hold off
+    /// a trip).
     pub fn reset_watchdog(&self) {
         self.update(|s| {
-            s.tripped = false;
-            s.kicked_us = None;
+            if s.tripped {
+                s.tripped = false;
+                s.kicked_us = None;
+            }
         });
     }
 
@@ -185,38 +244,57 @@ impl<const IW: usize, const OW: usize> Signals<IW, OW> {
     }
 }
 
+fn halt_of<const IW: usize>(s: &Shared<IW>) -> Option<Halt> {
+    if s.power_failed {
+        Some(Halt::PowerFail)
+    } else if s.tripped {
+        Some(Halt::Watchdog)
+    } else {
+        None
+    }
+}
+
 /// The executive's side of the shared state, used by [`Executive::cycle_with`](crate::Executive::cycle_with).
-impl<const IW: usize, const OW: usize> Supervision<IW> for Signals<IW, OW> {
+impl<const IW: usize, const OW: usize> Supervision<IW, OW> for Signals<IW, OW> {
     fn halted(&self) -> Option<Halt> {
+        halt_of(&self.read())
+    }
+
+    fn begin(&self) -> Result<Begin<IW>, Halt> {
+        self.update(|s| {
+            if let Some(halt) = halt_of(s) {
+                return Err(halt);
+            }
+            Ok(Begin {
+                events: s.events,
+                captured: Some(core::mem::replace(&mut s.captured, [0; IW])),
+                restart_from_safe: core::mem::replace(&mut s.restart_from_safe, false),
+            })
+        })
+    }
+
+    fn commit(&self, events: u32) -> Result<(), Halt> {
         let s = self.read();
-        if s.power_failed {
-            Some(Halt::PowerFail)
-        } else if s.tripped {
-            Some(Halt::Watchdog)
+        if s.events == events {
+            Ok(())
         } else {
-            None
+            Err(halt_of(&s).unwrap_or(s.last_event))
         }
     }
 
-    fn take_captured(&self) -> Option<[u16; IW]> {
-        Some(self.update(|s| core::mem::replace(&mut s.captured, [0; IW])))
-    }
-
-    /// The trip check and the write in one critical section: an interrupt cannot trip the
-    /// watchdog between them.
-    fn write_unless_tripped(&self, write: impl FnOnce()) -> bool {
-        critical_section::with(|cs| {
-            if self.shared.borrow(cs).get().tripped {
-                false
+    fn confirm(&self, events: u32, end_us: u32) -> Result<(), Halt> {
+        self.update(|s| {
+            if s.events == events {
+                s.kicked_us = Some(end_us);
+                Ok(())
             } else {
-                write();
-                true
+                Err(halt_of(s).unwrap_or(s.last_event))
             }
         })
     }
 
-    fn kick(&self, now_us: u32) {
-        self.update(|s| s.kicked_us = Some(now_us));
+    fn safe_outputs(&self) -> Option<&Image<OW>> {
+        Some(&self.safe_outputs)
     }
 }
 
