@@ -10,7 +10,7 @@
 
 use proptest::prelude::{prop, prop_assert_eq, proptest};
 use regler_scan_cycle::{
-    Checked, CycleConfig, DateTime, Executive, Io, MinuteTable, Start, Weekdays,
+    Checked, CycleConfig, DateTime, Executive, Io, MinuteTable, Restart, Start, Weekdays,
 };
 
 /// What one check handed out: (line, minutes late, missed), in order, and the totals.
@@ -341,7 +341,7 @@ fn after_an_outage_a_calendar_set_from_the_real_time_clock_is_right_and_catches_
     ); // to 05:56
     plc.power_fail(&mut plant);
     plant.wall_us += 10 * 60 * 1_000_000; // 10 minutes without power: 06:00 passes
-    plc.resume();
+    plc.resume(Restart::Inhibit);
     calendar = rtc(&plant); // set afresh from the real-time clock
     cycles(
         &mut plc,
