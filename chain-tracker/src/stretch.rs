@@ -407,6 +407,19 @@ mod tests {
     }
 
     #[test]
+    fn reconcile_takes_the_table_dia_and_says_whether_it_changed() {
+        let mut m = StretchMeter::new(StretchConfig::new(3000)).unwrap();
+        assert_eq!(m.measure(2990), Measurement::Pending { dia: 2990 });
+        assert_eq!(m.reconcile(3000), Ok(false));
+        // The half-confirmed candidate was forgotten.
+        assert_eq!(m.measure(2990), Measurement::Pending { dia: 2990 });
+        assert_eq!(m.reconcile(2990), Ok(true));
+        assert_eq!(m.dia(), 2990);
+        assert_eq!(m.reconcile(0), Err(StretchConfigError::ZeroMeasurement));
+        assert_eq!(m.dia(), 2990);
+    }
+
+    #[test]
     fn counting_restarts_on_start() {
         let mut m = StretchMeter::new(StretchConfig {
             confirmations: 1,
