@@ -16,11 +16,13 @@ pub struct StretchConfig {
     /// 2 (the default) means a single missed or extra pulse never causes a recalculation:
     /// the next measurement returns to the old value and the odd one is forgotten.
     pub confirmations: u8,
-    /// A measurement further than this from the accepted DIA (per mille of it) is not a
-    /// stretch but a fault (a dead initiator, a chain break) and is rejected outright. Default
-    /// 100 (10 %). Measured from the accepted DIA rather than from SIA: a chain stretches a
-    /// little between two measurements, however far it has stretched in all, so the meter
-    /// follows it for life; a limit around SIA stopped following at 10 % (111 ‰ of stretch).
+    /// A measurement further than this (per mille) outside the range between the accepted
+    /// DIA and SIA is not a chain but a fault (a dead initiator, a chain break) and is rejected
+    /// outright. Default 100 (10 %). Beyond the accepted DIA it is measured from the accepted
+    /// DIA: a chain stretches a little between two measurements, however far it has stretched
+    /// in all, so the meter follows it for life. Anywhere back towards SIA, and up to this far
+    /// beyond SIA (per mille of SIA), is plausible: a chain that was shortened or replaced,
+    /// which still needs `confirmations` equal measurements.
     pub plausible_per_mille: u32,
     /// Stretch (per mille, as [`StretchMeter::stretch_per_mille`]) past which the alarm is on:
     /// time to shorten the chain. Default 20 (2 %, 8 m on a 400 m chain).
@@ -84,7 +86,8 @@ pub enum Measurement {
         /// The new DIA.
         dia: u32,
     },
-    /// Implausibly far from SIA: counted as a fault, ignored.
+    /// More than `plausible_per_mille` outside the range between the accepted DIA and SIA (see
+    /// [`StretchConfig::plausible_per_mille`]), or 0: counted as a fault, ignored.
     Implausible {
         /// The value measured.
         dia: u32,
@@ -223,10 +226,20 @@ impl StretchMeter {
     /// plants whose hardware counts the pulses between the initiators).
     pub fn measure(&mut self, dia: u32) -> Measurement {
         self.measurements = self.measurements.saturating_add(1);
-        let limit =
-            u64::from(self.accepted).saturating_mul(u64::from(self.config.plausible_per_mille));
-        let off = u64::from(self.accepted.abs_diff(dia)).saturating_mul(1000);
-        if dia == 0 || off > limit {
+        // The range a chain can be in: from as stretched as accepted to as new (SIA); beyond
+        // either end by at most plausible_per_mille of that end.
+        let (short, long) = if self.accepted <= self.config.sia {
+            (self.accepted, self.config.sia)
+        } else {
+            (self.config.sia, self.accepted)
+        };
+        let (end, off) = if dia < short {
+            (short, short.abs_diff(dia))
+        } else {
+            (long, dia.saturating_sub(long))
+        };
+        let limit = u64::from(end).saturating_mul(u64::from(self.config.plausible_per_mille));
+        if dia == 0 || u64::from(off).saturating_mul(1000) > limit {
             self.rejected = self.rejected.saturating_add(1);
             return Measurement::Implausible { dia };
         }
@@ -246,6 +259,27 @@ impl StretchMeter {
             self.candidate = Some((dia, seen));
             Measurement::Pending { dia }
         }
+    }
+
+    /// Makes the meter agree with the distance table after a restart: takes the table's DIA
+    /// (`tracker.table().dia()`) as the accepted one and forgets a half-confirmed candidate.
+    /// Returns whether the meter's DIA changed; a DIA of 0 is an error and changes nothing.
+    ///
+    /// The meter and the tracker are stored apart, so power can fail between an
+    /// [`Accepted`](Measurement::Accepted) and the [`recalibrate`](crate::Tracker::recalibrate)
+    /// it asks for, or between storing one and the other. Without this, a meter stored after
+    /// accepting a DIA that the table never got says [`Unchanged`](Measurement::Unchanged) for
+    /// ever while the table stays at the old DIA. After it, whichever of the two was stale, the
+    /// next `confirmations` measurements of the chain's true DIA end in `Accepted` (or
+    /// `Unchanged` when the table already has it), and the table follows.
+    pub fn reconcile(&mut self, table_dia: u32) -> Result<bool, StretchConfigError> {
+        if table_dia == 0 {
+            return Err(StretchConfigError::ZeroMeasurement);
+        }
+        let changed = table_dia != self.accepted;
+        self.accepted = table_dia;
+        self.candidate = None;
+        Ok(changed)
     }
 
     /// The accepted DIA.
@@ -338,8 +372,13 @@ mod tests {
         assert_eq!(m.dia(), 2400);
         assert_eq!(m.stretch_per_mille(), 250);
         assert_eq!(m.rejected(), 0);
-        // A sudden jump is still a fault.
-        assert_eq!(m.measure(3000), Measurement::Implausible { dia: 3000 });
+        // A sudden jump further than 10 % past the accepted DIA, or past SIA, is a fault.
+        assert_eq!(m.measure(2159), Measurement::Implausible { dia: 2159 });
+        assert_eq!(m.measure(3301), Measurement::Implausible { dia: 3301 });
+        // A replaced chain (back at SIA) is followed once confirmed.
+        assert_eq!(m.measure(3000), Measurement::Pending { dia: 3000 });
+        assert_eq!(m.measure(3000), Measurement::Accepted { dia: 3000 });
+        assert!(!m.alarm());
     }
 
     #[test]
@@ -365,6 +404,19 @@ mod tests {
         assert!(!m.alarm()); // 5 ‰ is not past 5 ‰
         m.measure(2980);
         assert!(m.alarm());
+    }
+
+    #[test]
+    fn reconcile_takes_the_table_dia_and_says_whether_it_changed() {
+        let mut m = StretchMeter::new(StretchConfig::new(3000)).unwrap();
+        assert_eq!(m.measure(2990), Measurement::Pending { dia: 2990 });
+        assert_eq!(m.reconcile(3000), Ok(false));
+        // The half-confirmed candidate was forgotten.
+        assert_eq!(m.measure(2990), Measurement::Pending { dia: 2990 });
+        assert_eq!(m.reconcile(2990), Ok(true));
+        assert_eq!(m.dia(), 2990);
+        assert_eq!(m.reconcile(0), Err(StretchConfigError::ZeroMeasurement));
+        assert_eq!(m.dia(), 2990);
     }
 
     #[test]

@@ -121,8 +121,10 @@ pub enum TrackerError {
 }
 
 /// Pulses by which a trolley's remaining distance may exceed its tipper's distance in a
-/// snapshot: each recalibration rounds a rescaled distance to the nearest pulse, and keeps a
-/// trolley from overtaking the one before it.
+/// snapshot. A tracker never holds a trolley further from its tipper than the tipper's distance
+/// (at least 1): [`Tracker::recalibrate`] caps the rescaled distances there, so its own
+/// snapshots need no slack. The slack accepts snapshots stored by firmware built before that
+/// cap, whose rounding could leave a trolley a pulse or two further.
 pub const RESTORE_SLACK: u32 = 2;
 
 impl fmt::Display for TrackerError {
@@ -292,8 +294,10 @@ const IDLE_TIPPER: Tipper = Tipper {
 /// **Recalibration.** When the chain has stretched, [`recalibrate`](Tracker::recalibrate)
 /// recomputes the distance table and rescales the remaining distance of every trolley already
 /// on the chain: the physical distance still to go is unchanged while each pulse now stands for
-/// a longer piece of chain, so `remaining' = remaining × DIA_new / DIA_old`, rounded half up
-/// (at least 1, and never ahead of the trolley before it).
+/// a longer piece of chain, so `remaining' = remaining × DIA_new / DIA_old`, rounded half up,
+/// at most the tipper's new distance (no trolley is further from its tipper than the tipper is
+/// from the reader, however many recalibrations have rounded its distance), at least 1, and
+/// never ahead of the trolley before it. So every [`Snapshot`] a tracker takes restores.
 ///
 /// **Wrapping.** The pulse counter wraps at `u32::MAX`; arrivals are compared by wrapping
 /// difference, so tracking carries on across the wrap.
@@ -456,10 +460,33 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
         }
     }
 
-    /// Advances the chain `pulses` pulses, as many calls to [`pulse`](Tracker::pulse).
+    /// Advances the chain `pulses` pulses, with the same events as that many calls to
+    /// [`pulse`](Tracker::pulse), but at the cost of the pulses on which something happens:
+    /// the quiet pulses between them are skipped in one step. So a delta read from a hardware
+    /// counter costs O(T) per arrival or reset in it, and O(1) besides, whatever its size — a
+    /// wrapped counter's `u32::MAX` does not hang the loop.
     pub fn advance(&mut self, pulses: u32, mut on_event: impl FnMut(TipperEvent<K>)) {
-        for _ in 0..pulses {
-            self.pulse(&mut on_event);
+        let mut left = pulses;
+        while left > 0 {
+            let now = self.now;
+            // Pulses until the next arrival or reset (0 would be 2³² pulses away).
+            let until = [self.next_arrival, self.next_reset]
+                .into_iter()
+                .flatten()
+                .map(|at| at.wrapping_sub(now))
+                .filter(|&d| d != 0)
+                .min();
+            match until {
+                Some(d) if d <= left => {
+                    self.now = now.wrapping_add(d.saturating_sub(1));
+                    left = left.saturating_sub(d);
+                    self.pulse(&mut on_event);
+                }
+                _ => {
+                    self.now = now.wrapping_add(left);
+                    left = 0;
+                }
+            }
         }
     }
 
@@ -552,12 +579,19 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
         correct(longest, dia, old).map_err(|_| TrackerError::RescaleOverflow)?;
         self.table.commit(dia, da);
         let mut next: Option<u32> = None;
-        for q in &mut self.tippers {
+        for (q, &distance) in self.tippers.iter_mut().zip(da.iter()) {
+            // No trolley is further from its tipper than the tipper is from the reader: rounding
+            // a small remaining distance half up at every recalibration must not add up (it
+            // made the tracker's own snapshots fail `restore`).
+            let cap = distance.max(1);
             let mut index = q.head;
             let mut ahead = 1u32;
             while let Some(slot) = self.slots.get_mut(index_usize(index)) {
                 let remaining = slot.arrival.wrapping_sub(now);
-                let scaled = correct(remaining, dia, old).unwrap_or(remaining).max(ahead);
+                let scaled = correct(remaining, dia, old)
+                    .unwrap_or(remaining)
+                    .min(cap)
+                    .max(ahead);
                 slot.arrival = now.wrapping_add(scaled);
                 if index == q.head {
                     q.head_arrival = slot.arrival;
@@ -1044,6 +1078,27 @@ mod tests {
         b.restore(&snapshot).unwrap();
         assert_eq!(b.snapshot(), snapshot);
         assert_eq!(run(&mut a, 50), run(&mut b, 50));
+    }
+
+    /// The case: SA 50, SIA 1000, six small recalibrations with a trolley just entered
+    /// rounded its remaining distance up each time (50) while the tipper's distance fell to 47:
+    /// the tracker's own snapshot was refused as `TooFar`.
+    #[test]
+    fn own_snapshot_restores_after_many_small_recalibrations() {
+        let mut t: Tracker<u16, 4, 8> =
+            Tracker::new(DistanceTable::new(1000, &[50]).unwrap(), 6).unwrap();
+        t.enter(1, 0).unwrap();
+        for dia in [990, 981, 972, 963, 954, 945] {
+            t.recalibrate(dia).unwrap();
+            let remaining = t.in_flight().next().unwrap().remaining;
+            assert!(remaining <= t.table().distance(0).unwrap(), "DIA {dia}");
+            let snapshot = t.snapshot();
+            let mut fresh: Tracker<u16, 4, 8> =
+                Tracker::new(DistanceTable::new(1000, &[50]).unwrap(), 6).unwrap();
+            fresh.restore(&snapshot).unwrap();
+            assert_eq!(run(&mut fresh, 60), run(&mut t.clone(), 60));
+        }
+        assert_eq!(t.table().distance(0), Some(47));
     }
 
     #[test]

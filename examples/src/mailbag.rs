@@ -569,7 +569,8 @@ fn run_dock(
     let mut health: ReaderHealth<1000> = ReaderHealth::new(AlarmLimits {
         disagreement_per_mille: config.alarm_disagreement_per_mille,
         ..AlarmLimits::default()
-    });
+    })
+    .map_err(|e| e.to_string())?;
 
     // Every trolley in the plant has a destination somewhere: the registry the readers share.
     let mut registry: Registry<Destination> = Registry::new();

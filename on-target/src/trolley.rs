@@ -75,7 +75,7 @@ pub fn reader_health_alarm() -> Outcome {
         disagreement_per_mille: 1000,
         min_passages: 10,
     };
-    let mut health: ReaderHealth<50> = ReaderHealth::new(limits);
+    let mut health: ReaderHealth<50> = ReaderHealth::new(limits).map_err(|_| "limits")?;
     let mut voter = Voter::new(Strategy::Consecutive { k: 2 }).map_err(|_| "voter")?;
     let good = encode(TrolleyId::new(7).ok_or("id")?);
     for _ in 0..9 {

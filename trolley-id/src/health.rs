@@ -2,8 +2,6 @@
 
 use core::fmt;
 
-use heapless::HistoryBuf;
-
 use crate::voter::{Passage, Verdict};
 
 const PARITY: u8 = 1;
@@ -66,7 +64,9 @@ impl HealthStats {
         drop(&mut self.faulty_words, FAULTY);
     }
 
-    /// `count` per thousand passages, rounded down (0 when there were no passages).
+    /// `count` per thousand passages, rounded down (0 when there were no passages): for display.
+    /// The alarm does not use it; it compares the counts exactly (1 no-read in 170 passages is
+    /// 5.88 ‰, which this shows as 5 but the alarm counts as above a 5 ‰ limit).
     #[must_use]
     pub fn per_mille(&self, count: u32) -> u32 {
         let scaled = u64::from(count)
@@ -79,9 +79,15 @@ impl HealthStats {
 
 /// When a reader's alarm goes on and off.
 ///
-/// The alarm is raised when, over a window holding at least `min_passages` passages, the share
-/// of no-reads or of disagreements exceeds its limit (per mille). It clears only when both have
-/// fallen to half their limits, so a reader near its limit does not make the alarm chatter.
+/// The alarm is raised when the window holds at least `min_passages` passages and the share of
+/// no-reads or of disagreements in it exceeds its limit: `no_reads / passages >
+/// no_read_per_mille / 1000`, compared exactly (counts cross-multiplied, nothing rounded). It
+/// clears only when both shares are at or below half their limits (exactly, so half of 5 ‰ is
+/// 2.5 ‰), so a reader near its limit does not make the alarm chatter. A limit of 1000 ‰ or more
+/// can never be exceeded: it switches that symptom's alarm off.
+///
+/// [`ReaderHealth::new`] refuses limits whose `min_passages` exceeds the window `W`: the window
+/// could never hold that many passages and the alarm could never be raised.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -106,6 +112,36 @@ impl Default for AlarmLimits {
     }
 }
 
+/// Why [`ReaderHealth::new`] refused its limits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum AlarmLimitsError {
+    /// `min_passages` is more than the window holds: the alarm could never be raised.
+    MinPassagesAboveWindow {
+        /// The limits' `min_passages`.
+        min_passages: u32,
+        /// The window `W`, in passages.
+        window: usize,
+    },
+}
+
+impl fmt::Display for AlarmLimitsError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            AlarmLimitsError::MinPassagesAboveWindow {
+                min_passages,
+                window,
+            } => write!(
+                f,
+                "min_passages is {min_passages} but the window holds only {window} passages: the alarm could never be raised"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for AlarmLimitsError {}
+
 /// A change of a reader's alarm.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -119,15 +155,17 @@ pub enum AlarmChange {
 /// Health of one reader over a sliding window of its last `W` passages, with lifetime totals
 /// and an alarm.
 ///
-/// Each passage costs O(1) whatever `W`; the window is a [`heapless::HistoryBuf`] of one byte per
-/// passage: a `ReaderHealth<W>` is `W` bytes plus a `usize` and a flag for the window, two
-/// `HealthStats` (20 bytes each), the limits (12) and 8 bytes of alarm state, padded (a unit test
-/// checks it).
+/// Each passage costs O(1) whatever `W`; the window is a ring of one byte per passage: a
+/// `ReaderHealth<W>` is `W` bytes plus two `usize` for the window, two `HealthStats` (20 bytes
+/// each), the limits (12) and 5 bytes of alarm state (a flag and a count), padded to the
+/// alignment of a `usize` (a unit test checks it).
+/// [`record`](ReaderHealth::record) has no panic path (the no-panic probe firmware
+/// `footprint/src/bin/trolley_no_panic.rs` links only if none is left).
 ///
 /// ```
 /// use regler_trolley_id::{AlarmChange, AlarmLimits, encode, ReaderHealth, Strategy, TrolleyId, Voter};
 /// let limits = AlarmLimits { no_read_per_mille: 100, disagreement_per_mille: 1000, min_passages: 10 };
-/// let mut health: ReaderHealth<50> = ReaderHealth::new(limits);
+/// let mut health: ReaderHealth<50> = ReaderHealth::new(limits)?;
 /// let mut voter = Voter::new(Strategy::Consecutive { k: 2 })?;
 /// let good = encode(TrolleyId::try_from(7)?);
 /// for _ in 0..9 {
@@ -138,13 +176,34 @@ pub enum AlarmChange {
 /// assert_eq!(health.record(&voter.vote(&[0x0001])), Some(AlarmChange::Raised));
 /// assert!(health.alarm());
 /// assert_eq!(health.window().no_reads, 2);
+/// // The default limits want 100 passages: a window of 64 could never raise the alarm.
+/// assert!(ReaderHealth::<64>::new(AlarmLimits::default()).is_err());
 /// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// `new` is a `const fn`: limits fixed in the program can be checked when it is compiled.
+///
+/// ```compile_fail
+/// use regler_trolley_id::{AlarmLimits, ReaderHealth};
+/// // Refused at compile time: 100 passages do not fit in a window of 64.
+/// const HEALTH: ReaderHealth<64> = match ReaderHealth::new(AlarmLimits {
+///     no_read_per_mille: 5,
+///     disagreement_per_mille: 10,
+///     min_passages: 100,
+/// }) {
+///     Ok(h) => h,
+///     Err(_) => panic!("min_passages above the window"),
+/// };
+/// # let _ = HEALTH;
 /// ```
 #[derive(Clone, Debug)]
 pub struct ReaderHealth<const W: usize> {
     limits: AlarmLimits,
-    /// The symptom flags of the last `W` passages.
-    ring: HistoryBuf<u8, W>,
+    /// The symptom flags of the last `W` passages, `next` the slot the next one goes into.
+    ring: [u8; W],
+    next: usize,
+    /// Passages in the ring (up to `W`).
+    filled: usize,
     window: HealthStats,
     totals: HealthStats,
     alarm: bool,
@@ -152,18 +211,28 @@ pub struct ReaderHealth<const W: usize> {
 }
 
 impl<const W: usize> ReaderHealth<W> {
-    /// A reader with no passages yet, raising its alarm at `limits`.
-    #[must_use]
-    pub const fn new(limits: AlarmLimits) -> ReaderHealth<W> {
+    /// A reader with no passages yet, raising its alarm at `limits`; an error when
+    /// `limits.min_passages` exceeds the window `W` (the alarm could never be raised).
+    pub const fn new(limits: AlarmLimits) -> Result<ReaderHealth<W>, AlarmLimitsError> {
         const { assert!(W > 0, "a reader health window holds at least one passage") };
-        ReaderHealth {
+        // u32 → u64 and usize → u64 are lossless on every target Rust supports.
+        #[allow(clippy::cast_lossless, reason = "u64::from is not const")]
+        if limits.min_passages as u64 > W as u64 {
+            return Err(AlarmLimitsError::MinPassagesAboveWindow {
+                min_passages: limits.min_passages,
+                window: W,
+            });
+        }
+        Ok(ReaderHealth {
             limits,
-            ring: HistoryBuf::new(),
+            ring: [0; W],
+            next: 0,
+            filled: 0,
             window: HealthStats::ZERO,
             totals: HealthStats::ZERO,
             alarm: false,
             alarms_raised: 0,
-        }
+        })
     }
 
     /// Records one passage; returns the alarm change it caused, if any.
@@ -181,13 +250,18 @@ impl<const W: usize> ReaderHealth<W> {
         if passage.faulty_words > 0 {
             flags |= FAULTY;
         }
-        // The passage that falls out of the window leaves the window's counts.
-        if self.ring.is_full() {
-            if let Some(&oldest) = self.ring.oldest() {
-                self.window.remove(oldest);
+        // `next` < W always; `get_mut` rather than indexing so that no panic path is linked.
+        if let Some(slot) = self.ring.get_mut(self.next) {
+            // The passage that falls out of the window leaves the window's counts.
+            if self.filled == W {
+                self.window.remove(*slot);
+            } else {
+                self.filled = self.filled.saturating_add(1);
             }
+            *slot = flags;
         }
-        self.ring.write(flags);
+        let after = self.next.saturating_add(1);
+        self.next = if after >= W { 0 } else { after };
         self.window.add(flags);
         self.totals.add(flags);
         self.update_alarm()
@@ -195,20 +269,23 @@ impl<const W: usize> ReaderHealth<W> {
 
     fn update_alarm(&mut self) -> Option<AlarmChange> {
         let w = &self.window;
-        let no_reads = w.per_mille(w.no_reads);
-        let disagreements = w.per_mille(w.disagreements);
         let l = &self.limits;
+        // share > limit ‰  ⇔  count · 1000 > limit · passages, in u64: no rounding, no overflow.
+        let scaled = |count: u32, times: u64| u64::from(count).saturating_mul(times);
+        let of = |limit: u32| u64::from(limit).saturating_mul(u64::from(w.passages));
         if !self.alarm
             && w.passages >= l.min_passages
-            && (no_reads > l.no_read_per_mille || disagreements > l.disagreement_per_mille)
+            && (scaled(w.no_reads, 1000) > of(l.no_read_per_mille)
+                || scaled(w.disagreements, 1000) > of(l.disagreement_per_mille))
         {
             self.alarm = true;
             self.alarms_raised = self.alarms_raised.saturating_add(1);
             return Some(AlarmChange::Raised);
         }
+        // share <= limit/2 ‰  ⇔  count · 2000 <= limit · passages.
         if self.alarm
-            && no_reads <= l.no_read_per_mille / 2
-            && disagreements <= l.disagreement_per_mille / 2
+            && scaled(w.no_reads, 2000) <= of(l.no_read_per_mille)
+            && scaled(w.disagreements, 2000) <= of(l.disagreement_per_mille)
         {
             self.alarm = false;
             return Some(AlarmChange::Cleared);
@@ -249,7 +326,13 @@ impl<const W: usize> ReaderHealth<W> {
 
     /// Forgets every passage (after the reader was repaired) and clears the alarm.
     pub fn reset(&mut self) {
-        *self = ReaderHealth::new(self.limits);
+        self.ring = [0; W];
+        self.next = 0;
+        self.filled = 0;
+        self.window = HealthStats::ZERO;
+        self.totals = HealthStats::ZERO;
+        self.alarm = false;
+        self.alarms_raised = 0;
     }
 }
 
@@ -271,8 +354,9 @@ mod tests {
     #[test]
     fn size_is_the_documented_formula() {
         use core::mem::size_of;
-        let window = |w: usize| (w + size_of::<usize>() + 1).next_multiple_of(size_of::<usize>());
-        let size = |w: usize| (window(w) + 2 * 20 + 12 + 8).next_multiple_of(size_of::<usize>());
+        let size = |w: usize| {
+            (w + 2 * size_of::<usize>() + 2 * 20 + 12 + 5).next_multiple_of(size_of::<usize>())
+        };
         assert_eq!(size_of::<ReaderHealth<1000>>(), size(1000));
         assert_eq!(size_of::<ReaderHealth<7>>(), size(7));
     }
@@ -294,7 +378,11 @@ mod tests {
 
     #[test]
     fn window_forgets_old_passages_totals_do_not() {
-        let mut h: ReaderHealth<4> = ReaderHealth::new(AlarmLimits::default());
+        let limits = AlarmLimits {
+            min_passages: 4,
+            ..AlarmLimits::default()
+        };
+        let mut h: ReaderHealth<4> = ReaderHealth::new(limits).unwrap();
         h.record(&passage(true, 2, true));
         for _ in 0..4 {
             h.record(&passage(false, 0, false));
@@ -319,7 +407,7 @@ mod tests {
             disagreement_per_mille: 1000,
             min_passages: 5,
         };
-        let mut h: ReaderHealth<10> = ReaderHealth::new(limits);
+        let mut h: ReaderHealth<10> = ReaderHealth::new(limits).unwrap();
         // Three no-reads among the first four: below min_passages, no alarm yet.
         for nr in [true, true, true, false] {
             assert_eq!(h.record(&passage(nr, 0, false)), None);
@@ -353,5 +441,80 @@ mod tests {
         };
         assert_eq!(s.per_mille(s.no_reads), 333);
         assert_eq!(HealthStats::default().per_mille(5), 0);
+    }
+
+    fn no_read() -> Passage {
+        passage(true, 0, false)
+    }
+
+    /// Every window and `min_passages` pair `new` accepts can raise the alarm (by the passage
+    /// that fills `min_passages`, when every passage is a no-read), and every pair it refuses is
+    /// one whose window could never hold `min_passages` passages.
+    #[test]
+    fn every_accepted_window_and_min_passages_can_raise_the_alarm() {
+        fn sweep<const W: usize>() {
+            for min_passages in 0..=(W as u32 + 3) {
+                for no_read_per_mille in [0, 5, 999] {
+                    let limits = AlarmLimits {
+                        no_read_per_mille,
+                        disagreement_per_mille: 10,
+                        min_passages,
+                    };
+                    let made = ReaderHealth::<W>::new(limits);
+                    if min_passages as usize > W {
+                        assert_eq!(
+                            made.unwrap_err(),
+                            AlarmLimitsError::MinPassagesAboveWindow {
+                                min_passages,
+                                window: W
+                            }
+                        );
+                        continue;
+                    }
+                    let mut h = made.unwrap();
+                    let raised_at = (1..=2 * W as u32 + 2)
+                        .find(|_| h.record(&no_read()) == Some(AlarmChange::Raised));
+                    assert_eq!(raised_at, Some(min_passages.max(1)), "W {W}, {limits:?}");
+                }
+            }
+        }
+        sweep::<1>();
+        sweep::<2>();
+        sweep::<3>();
+        sweep::<16>();
+        sweep::<64>();
+        sweep::<100>();
+        sweep::<101>();
+        sweep::<1000>();
+        // The issue's case: the default limits and a window of 64 are refused.
+        assert!(ReaderHealth::<64>::new(AlarmLimits::default()).is_err());
+        assert!(ReaderHealth::<100>::new(AlarmLimits::default()).is_ok());
+    }
+
+    /// One no-read in 170 passages is 5.88 ‰: above a 5 ‰ limit, although `per_mille` shows 5.
+    #[test]
+    fn shares_are_compared_exactly_not_in_rounded_per_mille() {
+        let mut h: ReaderHealth<200> = ReaderHealth::new(AlarmLimits::default()).unwrap();
+        for _ in 0..169 {
+            assert_eq!(h.record(&passage(false, 0, false)), None);
+        }
+        assert_eq!(h.record(&no_read()), Some(AlarmChange::Raised));
+        assert_eq!(h.window().per_mille(h.window().no_reads), 5);
+        // One in 200 is exactly 5 ‰: not above it.
+        let mut h: ReaderHealth<200> = ReaderHealth::new(AlarmLimits::default()).unwrap();
+        for _ in 0..199 {
+            h.record(&passage(false, 0, false));
+        }
+        assert_eq!(h.record(&no_read()), None);
+    }
+
+    #[test]
+    fn limits_error_names_both_values() {
+        let e = AlarmLimitsError::MinPassagesAboveWindow {
+            min_passages: 100,
+            window: 64,
+        };
+        let text = e.to_string();
+        assert!(text.contains("100") && text.contains("64"), "{text}");
     }
 }

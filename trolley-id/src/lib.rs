@@ -20,6 +20,6 @@ pub use code::{
     CODE_MASK, InvalidTrolleyNumber, NUMBER_BITS, NUMBER_MASK, PARITY_BIT, ReadError, TrolleyId,
     decode, encode,
 };
-pub use health::{AlarmChange, AlarmLimits, HealthStats, ReaderHealth};
+pub use health::{AlarmChange, AlarmLimits, AlarmLimitsError, HealthStats, ReaderHealth};
 pub use registry::{REGISTRY_CELLS, Registry, RejectReason, Route};
 pub use voter::{NoRead, Passage, Strategy, StrategyError, Verdict, Voter};

@@ -12,8 +12,8 @@ use std::collections::BTreeMap;
 use proptest::prelude::{Just, any, prop, prop_assert, prop_assert_eq, prop_oneof, proptest};
 use proptest::strategy::Strategy as _;
 use regler_trolley_id::{
-    AlarmLimits, HealthStats, NoRead, Passage, ReaderHealth, Registry, RejectReason, Route,
-    Strategy, TrolleyId, Verdict, Voter, decode, encode,
+    AlarmChange, AlarmLimits, HealthStats, NoRead, Passage, ReaderHealth, Registry, RejectReason,
+    Route, Strategy, TrolleyId, Verdict, Voter, decode, encode,
 };
 
 /// Readings biased toward what a reader really sees: a true code, misreads of it, empty scans,
@@ -195,7 +195,8 @@ proptest! {
     #[test]
     fn health_window_matches_recount(flags in prop::collection::vec((any::<bool>(), any::<bool>(), any::<bool>()), 0..300)) {
         const W: usize = 16;
-        let mut health: ReaderHealth<W> = ReaderHealth::new(AlarmLimits::default());
+        let limits = AlarmLimits { min_passages: 16, ..AlarmLimits::default() };
+        let mut health: ReaderHealth<W> = ReaderHealth::new(limits).unwrap();
         let passages: Vec<Passage> = flags.iter().map(|&(no_read, parity, disagreement)| Passage {
             verdict: if no_read { Verdict::NoRead(NoRead::NoAgreement) } else { Verdict::Identified(TrolleyId::MIN) },
             samples: 1,
@@ -217,5 +218,85 @@ proptest! {
             prop_assert_eq!(health.window(), want);
             prop_assert_eq!(health.totals().passages as usize, i + 1);
         }
+    }
+}
+
+/// The alarm rule in the docs' words, over shares computed as real numbers: raised when the
+/// window holds at least `min_passages` and a share exceeds its limit, cleared when both shares
+/// are at or below half their limits.
+fn alarm_model<const W: usize>(
+    limits: AlarmLimits,
+    stream: &[(bool, bool)],
+) -> Result<(), proptest::test_runner::TestCaseError> {
+    let mut health: ReaderHealth<W> = ReaderHealth::new(limits).unwrap();
+    let mut alarm = false;
+    for (i, &(no_read, disagreement)) in stream.iter().enumerate() {
+        let change = health.record(&Passage {
+            verdict: if no_read {
+                Verdict::NoRead(NoRead::NoAgreement)
+            } else {
+                Verdict::Identified(TrolleyId::MIN)
+            },
+            samples: 1,
+            no_cams: 0,
+            parity_errors: 0,
+            faulty_words: 0,
+            disagreement,
+        });
+        let recent = &stream[(i + 1).saturating_sub(W)..=i];
+        let n = recent.len() as f64;
+        let share = |k: usize| k as f64 / n;
+        let no_reads = share(recent.iter().filter(|p| p.0).count());
+        let disagreements = share(recent.iter().filter(|p| p.1).count());
+        let (nl, dl) = (
+            f64::from(limits.no_read_per_mille) / 1000.0,
+            f64::from(limits.disagreement_per_mille) / 1000.0,
+        );
+        let want = if !alarm
+            && recent.len() >= limits.min_passages as usize
+            && (no_reads > nl || disagreements > dl)
+        {
+            alarm = true;
+            Some(AlarmChange::Raised)
+        } else if alarm && no_reads <= nl / 2.0 && disagreements <= dl / 2.0 {
+            alarm = false;
+            Some(AlarmChange::Cleared)
+        } else {
+            None
+        };
+        prop_assert_eq!(change, want, "passage {}", i);
+        prop_assert_eq!(health.alarm(), alarm);
+    }
+    Ok(())
+}
+
+fn limits_for(window: u32) -> impl proptest::strategy::Strategy<Value = AlarmLimits> {
+    (0u32..1100, 0u32..1100, 0..=window).prop_map(
+        |(no_read_per_mille, disagreement_per_mille, min_passages)| AlarmLimits {
+            no_read_per_mille,
+            disagreement_per_mille,
+            min_passages,
+        },
+    )
+}
+
+fn stream() -> impl proptest::strategy::Strategy<Value = Vec<(bool, bool)>> {
+    // Runs of good passages with bursts of symptoms, so shares cross their limits both ways.
+    prop::collection::vec(
+        (prop::bool::weighted(0.1), prop::bool::weighted(0.05)),
+        0..600,
+    )
+}
+
+proptest! {
+    #[test]
+    fn alarm_follows_the_documented_rule_exactly(
+        small in limits_for(1), two in limits_for(2), five in limits_for(5), big in limits_for(170),
+        passages in stream(),
+    ) {
+        alarm_model::<1>(small, &passages)?;
+        alarm_model::<2>(two, &passages)?;
+        alarm_model::<5>(five, &passages)?;
+        alarm_model::<170>(big, &passages)?;
     }
 }
