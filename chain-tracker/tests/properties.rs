@@ -375,8 +375,9 @@ fn pulses_then_quiet(t: &mut Tracker<u16, N, T>, pulses: u32) -> Vec<(u32, Tippe
 
 proptest! {
     /// `advance(k)` is k pulses for any k up to u32::MAX (a wrapped hardware counter), and it
-    /// costs what its arrivals and resets cost: a whole u32::MAX with a full chain takes well
-    /// under a second in a debug build (pulse by pulse it took ~9 s optimised).
+    /// costs what its arrivals and resets cost: about a third of the cases advance a full chain
+    /// by u32::MAX (pulse by pulse one such call took ~9 s optimised, so this test would not
+    /// finish; no clock is read, the bound is the test run's own time limit).
     #[test]
     fn a_huge_advance_is_its_pulses_at_the_cost_of_its_arrivals(
         sa in prop::collection::vec(0u32..3000, T),
@@ -394,10 +395,7 @@ proptest! {
         let mut b = a.clone();
         let mut got = Vec::new();
         let from = a.now();
-        let started = std::time::Instant::now();
         a.advance(pulses, |e| got.push(e));
-        let took = started.elapsed();
-        prop_assert!(took < std::time::Duration::from_millis(500), "advance({}) took {:?}", pulses, took);
         let want: Vec<_> = pulses_then_quiet(&mut b, pulses).into_iter().map(|(_, e)| e).collect();
         prop_assert_eq!(got, want);
         prop_assert_eq!(a.now(), from.wrapping_add(pulses));
