@@ -378,7 +378,8 @@ pub struct Staged<F = f64> {
     shadow: Parameters<F>,
     scaling: Scaling<F>,
     limits: OperatorLimits<F>,
-    commit_requested: bool,
+    /// The shadow set as it was at the last commit, waiting for the next sample.
+    pending: Option<Parameters<F>>,
 }
 
 impl<F: Real> Staged<F> {
@@ -398,7 +399,7 @@ impl<F: Real> Staged<F> {
             shadow: active,
             scaling,
             limits,
-            commit_requested: false,
+            pending: None,
         };
         let c = active.config;
         let nonneg = |v: F| v.is_finite() && v >= F::zero();
@@ -532,22 +533,31 @@ impl<F: Real> Staged<F> {
         Ok(())
     }
 
-    /// The operator is done (key D, the source's POP): the shadow set becomes active at the
-    /// next sample.
+    /// The operator is done (key D, the source's POP): the shadow set *as it is now* becomes
+    /// active at the next sample. Edits keyed after the commit change only the shadow set and
+    /// wait for a commit of their own; a second commit before the sample replaces the first
+    /// (it carries the first one's edits too, as the shadow set does).
     pub fn commit(&mut self) {
-        self.commit_requested = true;
+        self.pending = Some(self.shadow);
     }
 
-    /// Throws the shadow edits away.
+    /// Throws away the edits not yet committed: the shadow set goes back to the set that the
+    /// next sample puts into force (a pending commit, else the active set). A commit already
+    /// keyed stays pending.
     pub fn discard(&mut self) {
-        self.shadow = self.active;
-        self.commit_requested = false;
+        self.shadow = self.pending.unwrap_or(self.active);
     }
 
     /// Whether a commit waits for the next sample.
     #[must_use]
     pub const fn commit_pending(&self) -> bool {
-        self.commit_requested
+        self.pending.is_some()
+    }
+
+    /// The committed set waiting for the next sample, if any.
+    #[must_use]
+    pub const fn pending(&self) -> Option<&Parameters<F>> {
+        self.pending.as_ref()
     }
 
     /// Whether the shadow set differs from the active one.
@@ -556,14 +566,12 @@ impl<F: Real> Staged<F> {
         self.shadow != self.active
     }
 
-    /// At a sample boundary: the parameters to apply now, if the operator committed.
+    /// At a sample boundary: the parameters to apply now, if the operator committed — the
+    /// shadow set as it was at the commit.
     pub fn take_commit(&mut self) -> Option<Parameters<F>> {
-        if !self.commit_requested {
-            return None;
-        }
-        self.commit_requested = false;
-        self.active = self.shadow;
-        Some(self.active)
+        let committed = self.pending.take()?;
+        self.active = committed;
+        Some(committed)
     }
 
     /// A commit the controller could not apply: `previous` is active again, the shadow set
