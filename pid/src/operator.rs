@@ -211,6 +211,28 @@ pub enum Requirement<F = f64> {
     /// A value that leaves the whole configuration valid; the inner error says which
     /// parameter breaks it and why.
     ValidConfig(ConfigError<F>),
+    /// For WIN: at most SCALEMAX, and at least SCALEMIN plus the night set-back, so that the
+    /// night set-point WIN − set-back stays on the scale too.
+    NightOnScale {
+        /// SCALEMIN.
+        min: F,
+        /// SCALEMAX.
+        max: F,
+        /// The night set-back.
+        setback: F,
+    },
+    /// For TYP: the kind uses a parameter whose staged value is outside the operator's limits
+    /// (TI for kinds with I, TD for kinds with D).
+    KindUses {
+        /// The parameter the kind would bring into use.
+        code: Code,
+        /// Its staged value.
+        value: F,
+        /// Lowest allowed.
+        min: F,
+        /// Highest allowed.
+        max: F,
+    },
 }
 
 impl<F: Real> fmt::Display for Requirement<F> {
@@ -225,6 +247,20 @@ impl<F: Real> fmt::Display for Requirement<F> {
             Requirement::AtMostYmax(ymax) => write!(f, "<= YMAX ({ymax})"),
             Requirement::AtLeastYmin(ymin) => write!(f, ">= YMIN ({ymin})"),
             Requirement::ValidConfig(e) => write!(f, "such that {e}"),
+            Requirement::NightOnScale { min, max, setback } => write!(
+                f,
+                "between SCALEMIN {min} plus the night set-back {setback} and SCALEMAX {max}"
+            ),
+            Requirement::KindUses {
+                code,
+                value,
+                min,
+                max,
+            } => write!(
+                f,
+                "a kind whose {} ({value}) is within {min}..{max}",
+                code.name()
+            ),
         }
     }
 }
@@ -252,8 +288,20 @@ pub enum EditError<F = f64> {
     /// A starting configuration that does not validate, or that the controller's number type
     /// cannot hold; names the parameter.
     Config(ConfigError<F>),
-    /// A starting night set-back that is negative or not finite.
+    /// A starting night set-back that is negative, not finite, or takes the night set-point
+    /// WIN − set-back below SCALEMIN.
     NightSetback(F),
+    /// A scale the controller's number type cannot hold (a fixed-point `Station` would clip
+    /// the set-point and the measurement, or merge A/D counts): an end or the span beyond the
+    /// type's range, or two A/D counts that give the same value in the type.
+    ScaleUnrepresentable {
+        /// SCALEMIN.
+        min: F,
+        /// SCALEMAX.
+        max: F,
+        /// What is wrong.
+        reason: &'static str,
+    },
     /// One of the [`OperatorLimits`] is not finite or has min > max.
     BadLimits {
         /// Which range: "KP", "TI/TD", "S" or "YMIN/YMAX".
@@ -277,6 +325,7 @@ impl<F> EditError<F> {
             EditError::Config(e) => code_of(e.parameter()),
             EditError::UnknownCode(_)
             | EditError::NightSetback(_)
+            | EditError::ScaleUnrepresentable { .. }
             | EditError::BadLimits { .. } => None,
         }
     }
@@ -290,6 +339,7 @@ impl<F> EditError<F> {
             EditError::IllegalValue { .. }
             | EditError::Config(_)
             | EditError::NightSetback(_)
+            | EditError::ScaleUnrepresentable { .. }
             | EditError::BadLimits { .. } => "ILLEGAL VALUE",
         }
     }
@@ -326,9 +376,13 @@ impl<F: Real> fmt::Display for EditError<F> {
             EditError::NightSetback(v) => {
                 write!(
                     f,
-                    "ILLEGAL VALUE: the night set-back must be finite and >= 0, got {v}"
+                    "ILLEGAL VALUE: the night set-back must be finite, >= 0 and keep WIN - set-back >= SCALEMIN, got {v}"
                 )
             }
+            EditError::ScaleUnrepresentable { min, max, reason } => write!(
+                f,
+                "ILLEGAL VALUE: the scale SCALEMIN {min}, SCALEMAX {max} does not fit the controller's number type: {reason}"
+            ),
             EditError::BadLimits { range, min, max } => write!(
                 f,
                 "ILLEGAL VALUE: the operator limits for {range} must be finite with min <= max, got {min}..{max}"
@@ -385,8 +439,9 @@ pub struct Staged<F = f64> {
 impl<F: Real> Staged<F> {
     /// Staged parameters starting from `active`. Checked: the limits themselves
     /// ([`OperatorLimits::validate`]), the config ([`Config::validate`], the error names the
-    /// parameter), each operator value within its limits, the set-point on the scale, RFEL and
-    /// the night set-back finite and ≥ 0.
+    /// parameter), each operator value within its limits (TI only for kinds with I, TD only for
+    /// kinds with D), the set-point on the scale, RFEL finite and ≥ 0, the night set-back finite,
+    /// ≥ 0 and keeping the night set-point WIN − set-back ≥ SCALEMIN.
     pub fn new(
         active: Parameters<F>,
         scaling: Scaling<F>,
@@ -412,7 +467,6 @@ impl<F: Real> Staged<F> {
             (Code::Rfel, active.rfel, nonneg(active.rfel)),
             (Code::S, c.h, within(limits.sample, c.h)),
             (Code::Kp, c.k, within(limits.kp, c.k)),
-            (Code::Td, c.td, within(limits.time, c.td)),
             (Code::Ymin, c.ymin, within(limits.output, c.ymin)),
             (Code::Ymax, c.ymax, within(limits.output, c.ymax)),
         ];
@@ -425,14 +479,23 @@ impl<F: Real> Staged<F> {
                 });
             }
         }
-        if c.kind.has_i() && !within(limits.time, c.ti) {
-            return Err(EditError::IllegalValue {
-                code: Code::Ti,
-                value: c.ti,
-                requirement: staged.requirement(Code::Ti),
-            });
+        // TI and TD only where the kind uses them ([`edit_kind`](Staged::edit_kind) checks
+        // them when a kind brings them into use).
+        for (code, value, used) in [
+            (Code::Ti, c.ti, c.kind.has_i()),
+            (Code::Td, c.td, c.kind.has_d()),
+        ] {
+            if used && !within(limits.time, value) {
+                return Err(EditError::IllegalValue {
+                    code,
+                    value,
+                    requirement: staged.requirement(code),
+                });
+            }
         }
-        if !nonneg(active.night_setback) {
+        if !nonneg(active.night_setback)
+            || !(active.setpoint - active.night_setback >= scaling.min())
+        {
             return Err(EditError::NightSetback(active.night_setback));
         }
         Ok(staged)
@@ -443,6 +506,11 @@ impl<F: Real> Staged<F> {
         let l = self.limits;
         let range = |(min, max): (F, F)| Requirement::Within { min, max };
         match code {
+            Code::Win if self.shadow.night_setback > F::zero() => Requirement::NightOnScale {
+                min: self.scaling.min(),
+                max: self.scaling.max(),
+                setback: self.shadow.night_setback,
+            },
             Code::Win => Requirement::OnScale {
                 min: self.scaling.min(),
                 max: self.scaling.max(),
@@ -481,7 +549,10 @@ impl<F: Real> Staged<F> {
         let l = self.limits;
         let mut next = self.shadow;
         let in_range = match code {
-            Code::Win => self.scaling.contains(value),
+            Code::Win => {
+                self.scaling.contains(value)
+                    && value - self.shadow.night_setback >= self.scaling.min()
+            }
             Code::S => within(l.sample, value),
             Code::Kp => within(l.kp, value),
             Code::Td | Code::Ti => within(l.time, value),
@@ -518,10 +589,31 @@ impl<F: Real> Staged<F> {
         Ok(())
     }
 
-    /// Sets TYP in the shadow set. Refused if the kind needs a TI > 0 and the shadow TI is 0.
+    /// Sets TYP in the shadow set. Refused (the shadow set unchanged) if the kind uses a
+    /// parameter whose staged value is outside the operator's limits — TI for kinds with I, TD
+    /// for kinds with D ([`Requirement::KindUses`]) — or leaves the configuration invalid (a
+    /// kind with I and TI 0).
     pub fn edit_kind(&mut self, kind: Kind) -> Result<(), EditError<F>> {
         let mut next = self.shadow;
         next.config.kind = kind;
+        let (min, max) = self.limits.time;
+        for (code, value, used) in [
+            (Code::Ti, next.config.ti, kind.has_i()),
+            (Code::Td, next.config.td, kind.has_d()),
+        ] {
+            if used && !within(self.limits.time, value) {
+                return Err(EditError::IllegalValue {
+                    code: Code::Typ,
+                    value: F::from_u16(u16::from(kind_number(kind))),
+                    requirement: Requirement::KindUses {
+                        code,
+                        value,
+                        min,
+                        max,
+                    },
+                });
+            }
+        }
         next.config
             .validate()
             .map_err(|e| EditError::IllegalValue {
@@ -646,10 +738,51 @@ fn value_of<F: Real>(p: &Parameters<F>, code: Code) -> Option<F> {
     })
 }
 
+/// The RFEL alarm's hysteresis band: 1 % of the scale's span, but at most half of RFEL.
+fn alarm_band<F: Real>(rfel: F, scaling: Scaling<F>) -> F {
+    let span = (scaling.max() - scaling.min()) / F::from_u16(100);
+    let half = rfel / F::from_u16(2);
+    if span < half { span } else { half }
+}
+
+/// Whether `v` converts to `T` strictly inside its range (not saturated, finite).
+fn held<T: Scalar, F: Real>(v: F) -> bool {
+    let t = T::from_real(v);
+    t.is_finite() && t < T::MAX && t > T::ZERO.sub(T::MAX)
+}
+
+/// The scale checks of [`Station::new`].
+fn check_scale<T: Scalar, F: Real>(scaling: Scaling<F>) -> Result<(), EditError<F>> {
+    let (min, max) = (scaling.min(), scaling.max());
+    let refuse = |reason| EditError::ScaleUnrepresentable { min, max, reason };
+    if !(held::<T, F>(min) && held::<T, F>(max) && held::<T, F>(max - min)) {
+        return Err(refuse(
+            "SCALEMIN, SCALEMAX and their difference must lie inside its range",
+        ));
+    }
+    let mut last = T::from_real(min);
+    for count in 1..=crate::scaling::ADC_FULL_SCALE {
+        let next = scaling.count_to_units(count).map_or(last, T::from_real);
+        if next <= last {
+            return Err(refuse(
+                "two A/D counts give the same value: the scale is too narrow for its resolution",
+            ));
+        }
+        last = next;
+    }
+    Ok(())
+}
+
 /// The whole 1985 controller: a [`Pid`], its [`Staged`] parameters, the RFEL [`Alarm`] and the
 /// measurement [`Scaling`]. The foreground (operator) edits and commits; the background calls
 /// [`sample`](Station::sample) every S seconds, which applies a pending commit first, so all
 /// changes land together at a sample boundary, bumplessly.
+///
+/// The RFEL alarm has a hysteresis: it is raised when |WIN − XIN| exceeds RFEL and goes off
+/// only when |WIN − XIN| ≤ RFEL − band, band = the smaller of 1 % of the scale's span
+/// (SCALEMAX − SCALEMIN) and RFEL / 2; so an error wandering around RFEL by less than the band
+/// is one alarm, and the buzzer sounds once until the operator acknowledges. A NaN measurement
+/// counts as too large.
 ///
 /// `T` is the controller's number type, `F` the operator layer's (`f64` by default). A
 /// `Station<f32, f32>` does all its work in `f32`, so a single-precision FPU runs it without any
@@ -686,13 +819,20 @@ pub struct Station<T, F = f64> {
 
 impl<T: Scalar, F: Real> Station<T, F> {
     /// A station running `params` on `scaling` (fixed at start-up, as in the source). Checked as
-    /// [`Staged::new`], and the configuration must fit the controller's number type `T`.
+    /// [`Staged::new`], and the configuration must fit the controller's number type `T`; so
+    /// must the scale ([`EditError::ScaleUnrepresentable`]): SCALEMIN, SCALEMAX and the span
+    /// SCALEMAX − SCALEMIN strictly inside `T`'s range (so the set-point, a measurement on the
+    /// scale and their difference are never clipped; with the night set-point on the scale too,
+    /// every set-point the station can be given is held), and the 4096 A/D counts, converted
+    /// to `T`, strictly increasing (no two counts merge). The second check converts every
+    /// count once, at start-up only.
     pub fn new(
         params: Parameters<F>,
         scaling: Scaling<F>,
         limits: OperatorLimits<F>,
     ) -> Result<Station<T, F>, EditError<F>> {
         let staged = Staged::new(params, scaling, limits)?;
+        check_scale::<T, F>(scaling)?;
         let pid = Pid::<T>::new(&params.config).map_err(EditError::Config)?;
         let y = pid.output().to_real();
         Ok(Station {
@@ -738,9 +878,15 @@ impl<T: Scalar, F: Real> Station<T, F> {
         };
         self.y = u.to_real();
         let error = setpoint - xin;
+        // Hysteresis: an alarm is raised when |error| > RFEL and stays until |error| <= RFEL -
+        // band, so a noisy error near RFEL is one alarm, not one per crossing.
+        let threshold = if self.alarm.state() == AlarmState::Normal {
+            active.rfel
+        } else {
+            active.rfel - alarm_band(active.rfel, self.staged.scaling)
+        };
         // A NaN measurement is an alarm too: the operator must look.
-        self.alarm
-            .update(error.is_nan() || error.abs() > active.rfel);
+        self.alarm.update(error.is_nan() || error.abs() > threshold);
         self.y
     }
 
