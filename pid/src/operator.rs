@@ -211,16 +211,6 @@ pub enum Requirement<F = f64> {
     /// A value that leaves the whole configuration valid; the inner error says which
     /// parameter breaks it and why.
     ValidConfig(ConfigError<F>),
-    /// For WIN: at most SCALEMAX, and at least SCALEMIN plus the night set-back, so that the
-    /// night set-point WIN − set-back stays on the scale too.
-    NightOnScale {
-        /// SCALEMIN.
-        min: F,
-        /// SCALEMAX.
-        max: F,
-        /// The night set-back.
-        setback: F,
-    },
     /// For TYP: the kind uses a parameter whose staged value is outside the operator's limits
     /// (TI for kinds with I, TD for kinds with D).
     KindUses {
@@ -247,10 +237,6 @@ impl<F: Real> fmt::Display for Requirement<F> {
             Requirement::AtMostYmax(ymax) => write!(f, "<= YMAX ({ymax})"),
             Requirement::AtLeastYmin(ymin) => write!(f, ">= YMIN ({ymin})"),
             Requirement::ValidConfig(e) => write!(f, "such that {e}"),
-            Requirement::NightOnScale { min, max, setback } => write!(
-                f,
-                "between SCALEMIN {min} plus the night set-back {setback} and SCALEMAX {max}"
-            ),
             Requirement::KindUses {
                 code,
                 value,
@@ -288,8 +274,8 @@ pub enum EditError<F = f64> {
     /// A starting configuration that does not validate, or that the controller's number type
     /// cannot hold; names the parameter.
     Config(ConfigError<F>),
-    /// A starting night set-back that is negative, not finite, or takes the night set-point
-    /// WIN − set-back below SCALEMIN.
+    /// A starting night set-back that is negative, not finite, or larger than the scale's span
+    /// SCALEMAX − SCALEMIN.
     NightSetback(F),
     /// A scale the controller's number type cannot hold (a fixed-point `Station` would clip
     /// the set-point and the measurement, or merge A/D counts): an end or the span beyond the
@@ -376,7 +362,7 @@ impl<F: Real> fmt::Display for EditError<F> {
             EditError::NightSetback(v) => {
                 write!(
                     f,
-                    "ILLEGAL VALUE: the night set-back must be finite, >= 0 and keep WIN - set-back >= SCALEMIN, got {v}"
+                    "ILLEGAL VALUE: the night set-back must be finite, >= 0 and at most SCALEMAX - SCALEMIN, got {v}"
                 )
             }
             EditError::ScaleUnrepresentable { min, max, reason } => write!(
@@ -441,7 +427,7 @@ impl<F: Real> Staged<F> {
     /// ([`OperatorLimits::validate`]), the config ([`Config::validate`], the error names the
     /// parameter), each operator value within its limits (TI only for kinds with I, TD only for
     /// kinds with D), the set-point on the scale, RFEL finite and ≥ 0, the night set-back finite,
-    /// ≥ 0 and keeping the night set-point WIN − set-back ≥ SCALEMIN.
+    /// ≥ 0 and at most the scale's span.
     pub fn new(
         active: Parameters<F>,
         scaling: Scaling<F>,
@@ -493,9 +479,7 @@ impl<F: Real> Staged<F> {
                 });
             }
         }
-        if !nonneg(active.night_setback)
-            || !(active.setpoint - active.night_setback >= scaling.min())
-        {
+        if !nonneg(active.night_setback) || active.night_setback > scaling.max() - scaling.min() {
             return Err(EditError::NightSetback(active.night_setback));
         }
         Ok(staged)
@@ -506,11 +490,6 @@ impl<F: Real> Staged<F> {
         let l = self.limits;
         let range = |(min, max): (F, F)| Requirement::Within { min, max };
         match code {
-            Code::Win if self.shadow.night_setback > F::zero() => Requirement::NightOnScale {
-                min: self.scaling.min(),
-                max: self.scaling.max(),
-                setback: self.shadow.night_setback,
-            },
             Code::Win => Requirement::OnScale {
                 min: self.scaling.min(),
                 max: self.scaling.max(),
@@ -549,10 +528,7 @@ impl<F: Real> Staged<F> {
         let l = self.limits;
         let mut next = self.shadow;
         let in_range = match code {
-            Code::Win => {
-                self.scaling.contains(value)
-                    && value - self.shadow.night_setback >= self.scaling.min()
-            }
+            Code::Win => self.scaling.contains(value),
             Code::S => within(l.sample, value),
             Code::Kp => within(l.kp, value),
             Code::Td | Code::Ti => within(l.time, value),
@@ -918,12 +894,15 @@ impl<T: Scalar, F: Real> Station<T, F> {
         self.refused
     }
 
-    /// The set-point in force: WIN, less the night set-back while the night input is on.
+    /// The set-point in force: WIN, less the night set-back while the night input is on, but
+    /// never below SCALEMIN (so it is always on the scale, and held by the controller's type).
     #[must_use]
     pub fn setpoint(&self) -> F {
         let active = self.staged.active;
         if self.night {
-            active.setpoint - active.night_setback
+            let lowered = active.setpoint - active.night_setback;
+            let min = self.staged.scaling.min();
+            if lowered < min { min } else { lowered }
         } else {
             active.setpoint
         }

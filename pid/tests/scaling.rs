@@ -1,6 +1,15 @@
 //! `Scaling::count_to_units` over all 4096 counts of many random scales, in `f32` and `f64`,
 //! against a reference computed in double-double arithmetic: the ends exact, every count on the
 //! scale, never decreasing, and within the stated bound of the exact value.
+#![allow(
+    clippy::unwrap_used,
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects,
+    clippy::cast_possible_truncation,
+    clippy::float_cmp,
+    clippy::field_reassign_with_default,
+    reason = "a test may panic: that is how it fails"
+)]
 
 use regler_pid::{ADC_FULL_SCALE, Scaling, ScalingError};
 
