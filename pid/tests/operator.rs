@@ -140,6 +140,24 @@ fn fixed_point_station_refuses_a_scale_it_would_clip() {
     let narrower = Scaling::new(0.0, 30_000.0).unwrap();
     let mut st = Station::<I16F16, f64>::new(p_params(29_000.0, 5.0), narrower, limits).unwrap();
     assert_eq!(st.sample(0.0), 10.0);
+    // At the edges: SCALEMAX just past the range (its counts still increase: only the end is
+    // clipped), and ends that fit with a span that does not (the error would saturate).
+    for (min, max) in [(0.0, 32_770.0), (-20_000.0, 20_000.0), (-32_770.0, 0.0)] {
+        let scaling = Scaling::new(min, max).unwrap();
+        let got = Station::<I16F16, f64>::new(p_params(min, 5.0), scaling, limits);
+        assert!(
+            matches!(got, Err(regler_pid::EditError::ScaleUnrepresentable { .. })),
+            "{min}..{max}"
+        );
+    }
+    assert!(
+        Station::<I16F16, f64>::new(
+            p_params(0.0, 5.0),
+            Scaling::new(-16_000.0, 16_000.0).unwrap(),
+            limits
+        )
+        .is_ok()
+    );
 }
 
 /// Random scales around each type's range and resolution: a station accepts exactly the scales
@@ -376,6 +394,7 @@ fn a_noisy_error_near_rfel_is_one_alarm() {
         (0.0, 100.0, 1.0),
         (-50.0, 50.0, 0.0),
         (0.0, 1000.0, 3.0),
+        (100.0, 200.0, 20.0),
     ] {
         let band = f64::min((max - min) / 100.0, rfel / 2.0);
         let scaling = Scaling::new(min, max).unwrap();
