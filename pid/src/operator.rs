@@ -211,6 +211,18 @@ pub enum Requirement<F = f64> {
     /// A value that leaves the whole configuration valid; the inner error says which
     /// parameter breaks it and why.
     ValidConfig(ConfigError<F>),
+    /// For TYP: the kind uses a parameter whose staged value is outside the operator's limits
+    /// (TI for kinds with I, TD for kinds with D).
+    KindUses {
+        /// The parameter the kind would bring into use.
+        code: Code,
+        /// Its staged value.
+        value: F,
+        /// Lowest allowed.
+        min: F,
+        /// Highest allowed.
+        max: F,
+    },
 }
 
 impl<F: Real> fmt::Display for Requirement<F> {
@@ -225,6 +237,16 @@ impl<F: Real> fmt::Display for Requirement<F> {
             Requirement::AtMostYmax(ymax) => write!(f, "<= YMAX ({ymax})"),
             Requirement::AtLeastYmin(ymin) => write!(f, ">= YMIN ({ymin})"),
             Requirement::ValidConfig(e) => write!(f, "such that {e}"),
+            Requirement::KindUses {
+                code,
+                value,
+                min,
+                max,
+            } => write!(
+                f,
+                "a kind whose {} ({value}) is within {min}..{max}",
+                code.name()
+            ),
         }
     }
 }
@@ -252,8 +274,20 @@ pub enum EditError<F = f64> {
     /// A starting configuration that does not validate, or that the controller's number type
     /// cannot hold; names the parameter.
     Config(ConfigError<F>),
-    /// A starting night set-back that is negative or not finite.
+    /// A starting night set-back that is negative, not finite, or larger than the scale's span
+    /// SCALEMAX − SCALEMIN.
     NightSetback(F),
+    /// A scale the controller's number type cannot hold (a fixed-point `Station` would clip
+    /// the set-point and the measurement, or merge A/D counts): an end or the span beyond the
+    /// type's range, or two A/D counts that give the same value in the type.
+    ScaleUnrepresentable {
+        /// SCALEMIN.
+        min: F,
+        /// SCALEMAX.
+        max: F,
+        /// What is wrong.
+        reason: &'static str,
+    },
     /// One of the [`OperatorLimits`] is not finite or has min > max.
     BadLimits {
         /// Which range: "KP", "TI/TD", "S" or "YMIN/YMAX".
@@ -277,6 +311,7 @@ impl<F> EditError<F> {
             EditError::Config(e) => code_of(e.parameter()),
             EditError::UnknownCode(_)
             | EditError::NightSetback(_)
+            | EditError::ScaleUnrepresentable { .. }
             | EditError::BadLimits { .. } => None,
         }
     }
@@ -290,6 +325,7 @@ impl<F> EditError<F> {
             EditError::IllegalValue { .. }
             | EditError::Config(_)
             | EditError::NightSetback(_)
+            | EditError::ScaleUnrepresentable { .. }
             | EditError::BadLimits { .. } => "ILLEGAL VALUE",
         }
     }
@@ -326,9 +362,13 @@ impl<F: Real> fmt::Display for EditError<F> {
             EditError::NightSetback(v) => {
                 write!(
                     f,
-                    "ILLEGAL VALUE: the night set-back must be finite and >= 0, got {v}"
+                    "ILLEGAL VALUE: the night set-back must be finite, >= 0 and at most SCALEMAX - SCALEMIN, got {v}"
                 )
             }
+            EditError::ScaleUnrepresentable { min, max, reason } => write!(
+                f,
+                "ILLEGAL VALUE: the scale SCALEMIN {min}, SCALEMAX {max} does not fit the controller's number type: {reason}"
+            ),
             EditError::BadLimits { range, min, max } => write!(
                 f,
                 "ILLEGAL VALUE: the operator limits for {range} must be finite with min <= max, got {min}..{max}"
@@ -378,14 +418,16 @@ pub struct Staged<F = f64> {
     shadow: Parameters<F>,
     scaling: Scaling<F>,
     limits: OperatorLimits<F>,
-    commit_requested: bool,
+    /// The shadow set as it was at the last commit, waiting for the next sample.
+    pending: Option<Parameters<F>>,
 }
 
 impl<F: Real> Staged<F> {
     /// Staged parameters starting from `active`. Checked: the limits themselves
     /// ([`OperatorLimits::validate`]), the config ([`Config::validate`], the error names the
-    /// parameter), each operator value within its limits, the set-point on the scale, RFEL and
-    /// the night set-back finite and ≥ 0.
+    /// parameter), each operator value within its limits (TI only for kinds with I, TD only for
+    /// kinds with D), the set-point on the scale, RFEL finite and ≥ 0, the night set-back finite,
+    /// ≥ 0 and at most the scale's span.
     pub fn new(
         active: Parameters<F>,
         scaling: Scaling<F>,
@@ -398,7 +440,7 @@ impl<F: Real> Staged<F> {
             shadow: active,
             scaling,
             limits,
-            commit_requested: false,
+            pending: None,
         };
         let c = active.config;
         let nonneg = |v: F| v.is_finite() && v >= F::zero();
@@ -411,7 +453,6 @@ impl<F: Real> Staged<F> {
             (Code::Rfel, active.rfel, nonneg(active.rfel)),
             (Code::S, c.h, within(limits.sample, c.h)),
             (Code::Kp, c.k, within(limits.kp, c.k)),
-            (Code::Td, c.td, within(limits.time, c.td)),
             (Code::Ymin, c.ymin, within(limits.output, c.ymin)),
             (Code::Ymax, c.ymax, within(limits.output, c.ymax)),
         ];
@@ -424,14 +465,21 @@ impl<F: Real> Staged<F> {
                 });
             }
         }
-        if c.kind.has_i() && !within(limits.time, c.ti) {
-            return Err(EditError::IllegalValue {
-                code: Code::Ti,
-                value: c.ti,
-                requirement: staged.requirement(Code::Ti),
-            });
+        // TI and TD only where the kind uses them ([`edit_kind`](Staged::edit_kind) checks
+        // them when a kind brings them into use).
+        for (code, value, used) in [
+            (Code::Ti, c.ti, c.kind.has_i()),
+            (Code::Td, c.td, c.kind.has_d()),
+        ] {
+            if used && !within(limits.time, value) {
+                return Err(EditError::IllegalValue {
+                    code,
+                    value,
+                    requirement: staged.requirement(code),
+                });
+            }
         }
-        if !nonneg(active.night_setback) {
+        if !nonneg(active.night_setback) || active.night_setback > scaling.max() - scaling.min() {
             return Err(EditError::NightSetback(active.night_setback));
         }
         Ok(staged)
@@ -517,10 +565,31 @@ impl<F: Real> Staged<F> {
         Ok(())
     }
 
-    /// Sets TYP in the shadow set. Refused if the kind needs a TI > 0 and the shadow TI is 0.
+    /// Sets TYP in the shadow set. Refused (the shadow set unchanged) if the kind uses a
+    /// parameter whose staged value is outside the operator's limits — TI for kinds with I, TD
+    /// for kinds with D ([`Requirement::KindUses`]) — or leaves the configuration invalid (a
+    /// kind with I and TI 0).
     pub fn edit_kind(&mut self, kind: Kind) -> Result<(), EditError<F>> {
         let mut next = self.shadow;
         next.config.kind = kind;
+        let (min, max) = self.limits.time;
+        for (code, value, used) in [
+            (Code::Ti, next.config.ti, kind.has_i()),
+            (Code::Td, next.config.td, kind.has_d()),
+        ] {
+            if used && !within(self.limits.time, value) {
+                return Err(EditError::IllegalValue {
+                    code: Code::Typ,
+                    value: F::from_u16(u16::from(kind_number(kind))),
+                    requirement: Requirement::KindUses {
+                        code,
+                        value,
+                        min,
+                        max,
+                    },
+                });
+            }
+        }
         next.config
             .validate()
             .map_err(|e| EditError::IllegalValue {
@@ -532,22 +601,31 @@ impl<F: Real> Staged<F> {
         Ok(())
     }
 
-    /// The operator is done (key D, the source's POP): the shadow set becomes active at the
-    /// next sample.
+    /// The operator is done (key D, the source's POP): the shadow set *as it is now* becomes
+    /// active at the next sample. Edits keyed after the commit change only the shadow set and
+    /// wait for a commit of their own; a second commit before the sample replaces the first
+    /// (it carries the first one's edits too, as the shadow set does).
     pub fn commit(&mut self) {
-        self.commit_requested = true;
+        self.pending = Some(self.shadow);
     }
 
-    /// Throws the shadow edits away.
+    /// Throws away the edits not yet committed: the shadow set goes back to the set that the
+    /// next sample puts into force (a pending commit, else the active set). A commit already
+    /// keyed stays pending.
     pub fn discard(&mut self) {
-        self.shadow = self.active;
-        self.commit_requested = false;
+        self.shadow = self.pending.unwrap_or(self.active);
     }
 
     /// Whether a commit waits for the next sample.
     #[must_use]
     pub const fn commit_pending(&self) -> bool {
-        self.commit_requested
+        self.pending.is_some()
+    }
+
+    /// The committed set waiting for the next sample, if any.
+    #[must_use]
+    pub const fn pending(&self) -> Option<&Parameters<F>> {
+        self.pending.as_ref()
     }
 
     /// Whether the shadow set differs from the active one.
@@ -556,14 +634,12 @@ impl<F: Real> Staged<F> {
         self.shadow != self.active
     }
 
-    /// At a sample boundary: the parameters to apply now, if the operator committed.
+    /// At a sample boundary: the parameters to apply now, if the operator committed — the
+    /// shadow set as it was at the commit.
     pub fn take_commit(&mut self) -> Option<Parameters<F>> {
-        if !self.commit_requested {
-            return None;
-        }
-        self.commit_requested = false;
-        self.active = self.shadow;
-        Some(self.active)
+        let committed = self.pending.take()?;
+        self.active = committed;
+        Some(committed)
     }
 
     /// A commit the controller could not apply: `previous` is active again, the shadow set
@@ -638,10 +714,51 @@ fn value_of<F: Real>(p: &Parameters<F>, code: Code) -> Option<F> {
     })
 }
 
+/// The RFEL alarm's hysteresis band: 1 % of the scale's span, but at most half of RFEL.
+fn alarm_band<F: Real>(rfel: F, scaling: Scaling<F>) -> F {
+    let span = (scaling.max() - scaling.min()) / F::from_u16(100);
+    let half = rfel / F::from_u16(2);
+    if span < half { span } else { half }
+}
+
+/// Whether `v` converts to `T` strictly inside its range (not saturated, finite).
+fn held<T: Scalar, F: Real>(v: F) -> bool {
+    let t = T::from_real(v);
+    t.is_finite() && t < T::MAX && t > T::ZERO.sub(T::MAX)
+}
+
+/// The scale checks of [`Station::new`].
+fn check_scale<T: Scalar, F: Real>(scaling: Scaling<F>) -> Result<(), EditError<F>> {
+    let (min, max) = (scaling.min(), scaling.max());
+    let refuse = |reason| EditError::ScaleUnrepresentable { min, max, reason };
+    if !(held::<T, F>(min) && held::<T, F>(max) && held::<T, F>(max - min)) {
+        return Err(refuse(
+            "SCALEMIN, SCALEMAX and their difference must lie inside its range",
+        ));
+    }
+    let mut last = T::from_real(min);
+    for count in 1..=crate::scaling::ADC_FULL_SCALE {
+        let next = scaling.count_to_units(count).map_or(last, T::from_real);
+        if next <= last {
+            return Err(refuse(
+                "two A/D counts give the same value: the scale is too narrow for its resolution",
+            ));
+        }
+        last = next;
+    }
+    Ok(())
+}
+
 /// The whole 1985 controller: a [`Pid`], its [`Staged`] parameters, the RFEL [`Alarm`] and the
 /// measurement [`Scaling`]. The foreground (operator) edits and commits; the background calls
 /// [`sample`](Station::sample) every S seconds, which applies a pending commit first, so all
 /// changes land together at a sample boundary, bumplessly.
+///
+/// The RFEL alarm has a hysteresis: it is raised when |WIN − XIN| exceeds RFEL and goes off
+/// only when |WIN − XIN| ≤ RFEL − band, band = the smaller of 1 % of the scale's span
+/// (SCALEMAX − SCALEMIN) and RFEL / 2; so an error wandering around RFEL by less than the band
+/// is one alarm, and the buzzer sounds once until the operator acknowledges. A NaN measurement
+/// counts as too large.
 ///
 /// `T` is the controller's number type, `F` the operator layer's (`f64` by default). A
 /// `Station<f32, f32>` does all its work in `f32`, so a single-precision FPU runs it without any
@@ -678,13 +795,20 @@ pub struct Station<T, F = f64> {
 
 impl<T: Scalar, F: Real> Station<T, F> {
     /// A station running `params` on `scaling` (fixed at start-up, as in the source). Checked as
-    /// [`Staged::new`], and the configuration must fit the controller's number type `T`.
+    /// [`Staged::new`], and the configuration must fit the controller's number type `T`; so
+    /// must the scale ([`EditError::ScaleUnrepresentable`]): SCALEMIN, SCALEMAX and the span
+    /// SCALEMAX − SCALEMIN strictly inside `T`'s range (so the set-point, a measurement on the
+    /// scale and their difference are never clipped; with the night set-point on the scale too,
+    /// every set-point the station can be given is held), and the 4096 A/D counts, converted
+    /// to `T`, strictly increasing (no two counts merge). The second check converts every
+    /// count once, at start-up only.
     pub fn new(
         params: Parameters<F>,
         scaling: Scaling<F>,
         limits: OperatorLimits<F>,
     ) -> Result<Station<T, F>, EditError<F>> {
         let staged = Staged::new(params, scaling, limits)?;
+        check_scale::<T, F>(scaling)?;
         let pid = Pid::<T>::new(&params.config).map_err(EditError::Config)?;
         let y = pid.output().to_real();
         Ok(Station {
@@ -730,9 +854,15 @@ impl<T: Scalar, F: Real> Station<T, F> {
         };
         self.y = u.to_real();
         let error = setpoint - xin;
+        // Hysteresis: an alarm is raised when |error| > RFEL and stays until |error| <= RFEL -
+        // band, so a noisy error near RFEL is one alarm, not one per crossing.
+        let threshold = if self.alarm.state() == AlarmState::Normal {
+            active.rfel
+        } else {
+            active.rfel - alarm_band(active.rfel, self.staged.scaling)
+        };
         // A NaN measurement is an alarm too: the operator must look.
-        self.alarm
-            .update(error.is_nan() || error.abs() > active.rfel);
+        self.alarm.update(error.is_nan() || error.abs() > threshold);
         self.y
     }
 
@@ -764,12 +894,15 @@ impl<T: Scalar, F: Real> Station<T, F> {
         self.refused
     }
 
-    /// The set-point in force: WIN, less the night set-back while the night input is on.
+    /// The set-point in force: WIN, less the night set-back while the night input is on, but
+    /// never below SCALEMIN (so it is always on the scale, and held by the controller's type).
     #[must_use]
     pub fn setpoint(&self) -> F {
         let active = self.staged.active;
         if self.night {
-            active.setpoint - active.night_setback
+            let lowered = active.setpoint - active.night_setback;
+            let min = self.staged.scaling.min();
+            if lowered < min { min } else { lowered }
         } else {
             active.setpoint
         }

@@ -21,8 +21,10 @@ pub trait Scalar: Copy + PartialOrd + core::fmt::Debug {
     const MAX: Self;
     /// The nearest value to `v`. Floats: a finite `v` beyond the range saturates at `±MAX`; NaN
     /// and infinities stay NaN and infinities, so a broken reading still reaches the controller's
-    /// fault check. Fixed point: saturating, NaN → 0 (check finiteness before converting a
-    /// measurement; [`Station`](crate::Station) does).
+    /// fault check. Fixed point: the nearest value, ties away from zero, saturating at
+    /// `MIN`/`MAX`; +∞ → `MAX`, −∞ → `MIN`, NaN → 0 (check finiteness before converting a
+    /// measurement; [`Station`](crate::Station) does). No panic path is linked, so a firmware
+    /// whose panic handler is undefined links (`footprint/src/bin/pid_fixed_no_panic.rs`).
     #[must_use]
     fn from_real<F: Real>(v: F) -> Self;
     /// The value in a [`Real`] type (nearest; saturating as [`from_real`](Scalar::from_real)).
@@ -167,12 +169,22 @@ macro_rules! fixed_scalar {
         impl<Frac: fixed::types::extra::$bound> Scalar for fixed::$fixed<Frac> {
             const ZERO: Self = Self::ZERO;
             const MAX: Self = Self::MAX;
+            /// Scaled by 2^frac (exact: a power of two), rounded to nearest with ties away
+            /// from zero, saturated; NaN → 0, +∞ → `MAX`, −∞ → `MIN`. Written out rather than
+            /// `saturating_from_num`, which links a `panic!` for NaN: a firmware whose panic
+            /// handler is undefined would not link (`footprint/src/bin/pid_fixed_no_panic.rs`).
             fn from_real<F: Real>(v: F) -> Self {
-                if v.is_nan() {
-                    Self::ZERO
+                // 2^frac (frac <= 64): the exponent field of an f64 set directly.
+                let exponent = 1023u64.saturating_add(u64::from(Frac::U32));
+                let pow2 = f64::from_bits(exponent.wrapping_shl(52));
+                #[allow(clippy::arithmetic_side_effects, reason = "f64: cannot panic")]
+                let scaled = v.to_f64_exact() * pow2;
+                let bits = nearest_i64(scaled);
+                Self::from_bits(<$bits>::try_from(bits).unwrap_or(if bits < 0 {
+                    <$bits>::MIN
                 } else {
-                    Self::saturating_from_num(v.to_f64_exact())
-                }
+                    <$bits>::MAX
+                }))
             }
             fn to_real<F: Real>(self) -> F {
                 F::from_f64_nearest(self.to_num::<f64>())
@@ -221,6 +233,30 @@ macro_rules! fixed_scalar {
     };
 }
 
+/// `x` rounded to the nearest integer, ties away from zero, saturated to `i64`; NaN → 0. No
+/// panic path: the float-to-integer casts saturate.
+#[cfg(feature = "fixed")]
+#[allow(
+    clippy::cast_possible_truncation,
+    clippy::cast_precision_loss,
+    clippy::arithmetic_side_effects,
+    reason = "the casts saturate (and are exact where it matters, see below); f64 arithmetic cannot panic"
+)]
+fn nearest_i64(x: f64) -> i64 {
+    // Truncation toward zero, saturating (NaN → 0). Below 2⁵² in magnitude, x − t is the exact
+    // fraction; from 2⁵² up x is an integer, so t = x exactly (or saturated) and the rest is 0
+    // (or of the sign that keeps the saturation).
+    let t = x as i64;
+    let rest = x - t as f64;
+    if rest >= 0.5 {
+        t.saturating_add(1)
+    } else if rest <= -0.5 {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
+}
+
 #[cfg(feature = "fixed")]
 fixed_scalar!(FixedI32, LeEqU32, i32, i64);
 #[cfg(feature = "fixed")]
@@ -252,6 +288,97 @@ mod tests {
         assert_eq!(Scalar::mul(I16F16::MIN, I16F16::MAX), I16F16::MIN);
         assert_eq!(Scalar::sub(I32F32::MIN, I32F32::ONE), I32F32::MIN);
         assert_eq!(<I32F32 as Scalar>::from_f64(2.25).to_f64(), 2.25);
+    }
+
+    /// The conversion is the nearest value, ties away from zero, saturated; NaN → 0 and the
+    /// infinities saturate: checked against `f64::round` (ties away) in i128 over values of
+    /// every exponent, sign and many mantissas, and against the `fixed` crate's own conversion
+    /// off the ties (it rounds ties to even).
+    #[cfg(feature = "fixed")]
+    #[test]
+    fn fixed_from_real_is_nearest_and_saturating_everywhere() {
+        use fixed::types::{I0F32, I16F16, I32F0, I32F32, I48F16};
+        macro_rules! check {
+            ($t:ty, $v:expr) => {{
+                let v: f64 = $v;
+                let got = <$t as Scalar>::from_f64(v).to_bits();
+                let x = v * 2f64.powi(<$t>::FRAC_NBITS as i32);
+                let (lo, hi) = (
+                    i128::from(<$t>::MIN.to_bits()),
+                    i128::from(<$t>::MAX.to_bits()),
+                );
+                let want = if v.is_nan() {
+                    0
+                } else {
+                    (x.round() as i128).clamp(lo, hi)
+                };
+                assert_eq!(i128::from(got), want, "{} {v:e}", stringify!($t));
+                if !v.is_nan() && x.fract().abs() != 0.5 {
+                    assert_eq!(got, <$t>::saturating_from_num(v).to_bits(), "{v:e}");
+                }
+                // Through f32 too (exact widening), as a Station<_, f32> converts.
+                let narrow = v as f32;
+                let x32 = f64::from(narrow) * 2f64.powi(<$t>::FRAC_NBITS as i32);
+                let want32 = if narrow.is_nan() {
+                    0
+                } else {
+                    (x32.round() as i128).clamp(lo, hi)
+                };
+                assert_eq!(
+                    i128::from(<$t as Scalar>::from_real(narrow).to_bits()),
+                    want32,
+                    "{narrow:e}"
+                );
+            }};
+        }
+        let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+        let specials = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -2.5,
+            f64::NAN,
+            f64::INFINITY,
+            -f64::INFINITY,
+            f64::MAX,
+            f64::MIN,
+            32768.0,
+            -32768.0,
+            32767.99999,
+            2f64.powi(31),
+            -2f64.powi(31),
+            2f64.powi(63),
+            -2f64.powi(63),
+            2f64.powi(52) + 1.0,
+            0.5 - f64::EPSILON / 4.0,
+        ];
+        let randoms = (0..200_000u64).map(|n| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            // Exponents from 2^-70 to 2^70 (where every type goes from 0 to saturated), and now
+            // and then one anywhere; ties made on purpose every eighth value.
+            let e = if n % 16 == 0 {
+                x >> 53 & 0x7FF
+            } else {
+                1023 - 70 + (x >> 40) % 141
+            };
+            let v = f64::from_bits((x & 0x800F_FFFF_FFFF_FFFF) | (e << 52));
+            if n % 8 == 1 {
+                (v * 65536.0).trunc() / 65536.0 + 0.5 / 65536.0
+            } else {
+                v
+            }
+        });
+        for v in specials.into_iter().chain(randoms) {
+            check!(I16F16, v);
+            check!(I32F32, v);
+            check!(I0F32, v);
+            check!(I32F0, v);
+            check!(I48F16, v);
+        }
     }
 
     /// Every product of two I16F16 values drawn over the whole range is the exact product

@@ -36,6 +36,14 @@ pub enum ScalingError<F = f64> {
     },
     /// A voltage that is NaN.
     NotANumber,
+    /// SCALEMAX − SCALEMIN times 4095 is not finite in the number type: the conversion of a
+    /// count would overflow.
+    SpanTooLarge {
+        /// SCALEMIN.
+        min: F,
+        /// SCALEMAX.
+        max: F,
+    },
 }
 
 impl<F: Real> fmt::Display for ScalingError<F> {
@@ -55,6 +63,10 @@ impl<F: Real> fmt::Display for ScalingError<F> {
                 )
             }
             ScalingError::NotANumber => f.write_str("the voltage is NaN"),
+            ScalingError::SpanTooLarge { min, max } => write!(
+                f,
+                "SCALEMAX - SCALEMIN times {ADC_FULL_SCALE} must be finite, got SCALEMIN {min}, SCALEMAX {max}"
+            ),
         }
     }
 }
@@ -64,8 +76,11 @@ impl<F: Real> core::error::Error for ScalingError<F> {}
 /// The measurement's scale, fixed at start-up: 0 V (count 0) is SCALEMIN, 10 V (count 4095)
 /// is SCALEMAX. The output is in volts, 0–10 V, to an 8-bit D/A. In `f64` (the default) or `f32`.
 ///
-/// Rounding: A/D counts map linearly to engineering units (exactly in `f64`, to the nearest
-/// `f32` in `f32`); volts map to the nearest D/A count, halves rounded up, clamped to 0–255.
+/// Rounding: A/D counts map linearly to engineering units, SCALEMIN + (SCALEMAX − SCALEMIN) ·
+/// count / 4095 computed in the scale's type: count 0 is SCALEMIN and count 4095 is SCALEMAX
+/// exactly, every count lands within SCALEMIN..=SCALEMAX, a higher count never gives a lower
+/// value, and each value is within 2ε·(SCALEMAX − SCALEMIN) + ε·max(|SCALEMIN|, |SCALEMAX|) of
+/// the exact one (ε = the type's `EPSILON`: 2⁻⁵² for `f64`, 2⁻²³ for `f32`). Volts map to the nearest D/A count, halves rounded up, clamped to 0–255.
 /// Deserializing goes through [`Scaling::new`], so stored data with SCALEMAX ≤ SCALEMIN is an
 /// error, never a scale that divides by zero.
 ///
@@ -113,14 +128,21 @@ impl<F: Real> TryFrom<RawScaling<F>> for Scaling<F> {
 }
 
 impl<F: Real> Scaling<F> {
-    /// The scale SCALEMIN..SCALEMAX.
+    /// The scale SCALEMIN..SCALEMAX. Refused: an end that is not finite, SCALEMAX ≤ SCALEMIN,
+    /// and a span (SCALEMAX − SCALEMIN) whose product with 4095 is not finite.
     pub fn new(scale_min: F, scale_max: F) -> Result<Scaling<F>, ScalingError<F>> {
         if !(scale_min.is_finite() && scale_max.is_finite()) {
             return Err(ScalingError::NotFinite);
         }
-        // The span must be finite too, or every conversion is infinite or NaN.
-        if scale_max <= scale_min || !(scale_max - scale_min).is_finite() {
+        if scale_max <= scale_min {
             return Err(ScalingError::Reversed {
+                min: scale_min,
+                max: scale_max,
+            });
+        }
+        // The span times the full-scale count must be finite too, or a conversion overflows.
+        if !((scale_max - scale_min) * F::from_u16(ADC_FULL_SCALE)).is_finite() {
+            return Err(ScalingError::SpanTooLarge {
                 min: scale_min,
                 max: scale_max,
             });
@@ -148,7 +170,14 @@ impl<F: Real> Scaling<F> {
         if count > ADC_FULL_SCALE {
             return Err(ScalingError::CountOutOfRange { count });
         }
-        Ok(self.min + (self.max - self.min) * F::from_u16(count) / F::from_u16(ADC_FULL_SCALE))
+        if count == ADC_FULL_SCALE {
+            return Ok(self.max);
+        }
+        // Each step rounds monotonically, so the result never decreases with the count; the
+        // clamp keeps rounding from leaving the scale and keeps the order.
+        let units =
+            self.min + (self.max - self.min) * F::from_u16(count) / F::from_u16(ADC_FULL_SCALE);
+        Ok(if units > self.max { self.max } else { units })
     }
 
     /// An engineering value as the nearest A/D count (clamped to 0–4095), for simulators.
