@@ -263,7 +263,8 @@ impl DateTime {
     }
 
     /// Advances by `ms` milliseconds; returns how many whole minutes began on the way. The
-    /// clock stops at [`DateTime::END`] rather than wrapping into an earlier year.
+    /// clock stops at [`DateTime::END`] rather than wrapping into an earlier year; the minute
+    /// after it never begins, so it is not counted.
     pub fn advance(&mut self, ms: u32) -> u32 {
         let mut minutes = 0u32;
         let total = u32::from(self.millis).saturating_add(ms % 1000);
@@ -299,8 +300,10 @@ impl DateTime {
                 continue;
             }
             if self.year >= 9999 {
+                // The minute counted last would be 10000-01-01 00:00, which the clock never
+                // enters: it stops in 9999-12-31 23:59.
                 *self = DateTime::END;
-                return minutes;
+                return minutes.saturating_sub(1);
             }
             self.month = 1;
             self.year = self.year.saturating_add(1);
@@ -425,6 +428,52 @@ const MINUTES_PER_DAY: i64 = 1440;
 const MINUTES_PER_WEEK: i64 = 7 * MINUTES_PER_DAY;
 
 /// Whole minutes since 0001-01-01 00:00 (the seconds left out); at most about 5.3 · 10⁹.
+/// Swaps `items[a]` and `items[b]` for `a < b`; does nothing when either is out of range. No
+/// panic path, unlike `slice::swap`.
+fn swap_ordered<T>(items: &mut [T], a: usize, b: usize) {
+    if let Some((low, high)) = items.split_at_mut_checked(b)
+        && let (Some(x), Some(y)) = (low.get_mut(a), high.first_mut())
+    {
+        core::mem::swap(x, y);
+    }
+}
+
+/// Heap sort, ascending, O(n log n) and in place. `core`'s sorts keep a panic path (a check for
+/// an inconsistent `Ord`) that a no-panic firmware cannot link; this one has none.
+fn heap_sort<T: Ord>(items: &mut [T]) {
+    // Moves the element at `root` down the max-heap in `items[..end]`.
+    fn sift_down<T: Ord>(items: &mut [T], mut root: usize, end: usize) {
+        loop {
+            let Some(left) = root.checked_mul(2).and_then(|r| r.checked_add(1)) else {
+                return;
+            };
+            if left >= end {
+                return;
+            }
+            let right = left.saturating_add(1);
+            let child = match (items.get(left), items.get(right)) {
+                (Some(l), Some(r)) if right < end && r > l => right,
+                _ => left,
+            };
+            match (items.get(root), items.get(child)) {
+                (Some(r), Some(c)) if c > r => {
+                    swap_ordered(items, root, child);
+                    root = child;
+                }
+                _ => return,
+            }
+        }
+    }
+    let len = items.len();
+    for root in (0..len / 2).rev() {
+        sift_down(items, root, len);
+    }
+    for end in (1..len).rev() {
+        swap_ordered(items, 0, end);
+        sift_down(items, 0, end);
+    }
+}
+
 fn minute_number(t: &DateTime) -> i64 {
     day_number(t.year, t.month, t.day)
         .saturating_mul(MINUTES_PER_DAY)
@@ -580,7 +629,7 @@ impl<P, const M: usize> MinuteTable<P, M> {
                 let _ = due.push((at, index, missed));
             }
         }
-        due.sort_unstable();
+        heap_sort(&mut due);
         for &(at, index, missed) in &due {
             let Some(line) = self.starts.get(index) else {
                 continue;
@@ -670,10 +719,65 @@ mod tests {
             "the second must be 0..=59, got 60"
         );
         let mut late = DateTime::new(9999, 12, 31, 23, 59, 0).unwrap();
-        assert_eq!(late.advance(120_000), 1, "one minute began before the end");
+        assert_eq!(
+            late.advance(120_000),
+            0,
+            "no minute begins after the last one"
+        );
         assert_eq!(late, DateTime::END, "stops, does not wrap to 9999-01-01");
-        late.advance(u32::MAX);
+        assert_eq!(late.advance(u32::MAX), 0);
         assert_eq!(late, DateTime::END);
+    }
+
+    #[test]
+    fn advance_into_the_end_counts_only_the_minutes_the_clock_entered() {
+        // Every start second of the last two minutes, every step up to past the end: the count
+        // is the minute boundaries crossed up to 23:59, the last minute the clock enters.
+        for start in 0..120u32 {
+            for step_s in 0..=180u32 {
+                let minute = u8::try_from(58 + start / 60).unwrap();
+                let second = u8::try_from(start % 60).unwrap();
+                let mut t = DateTime::new(9999, 12, 31, 23, minute, second).unwrap();
+                let began = t.advance(step_s * 1000);
+                let reached = (start + step_s).min(119); // seconds since 23:58:00, capped at END
+                let want = reached / 60 - start / 60;
+                assert_eq!(began, want, "from 23:{minute}:{second} by {step_s} s");
+                if start + step_s > 119 {
+                    assert_eq!(t, DateTime::END);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn heap_sort_sorts_every_small_slice_like_core() {
+        // Every sequence of length 0..=6 over 4 values (ties included), and longer random ones.
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        for len in 0..=6u32 {
+            for code in 0..4u32.pow(len) {
+                let mut v: std::vec::Vec<(u32, usize)> = (0..len)
+                    .map(|i| ((code >> (2 * i)) & 3, i as usize % 2))
+                    .collect();
+                let mut want = v.clone();
+                want.sort_unstable();
+                heap_sort(&mut v);
+                assert_eq!(v, want);
+            }
+        }
+        for len in [7usize, 31, 64, 257, 1440] {
+            let mut v: std::vec::Vec<(i64, usize, u64)> = (0..len)
+                .map(|i| {
+                    state ^= state << 13;
+                    state ^= state >> 7;
+                    state ^= state << 17;
+                    ((state % 50) as i64 - 25, i, state % 3)
+                })
+                .collect();
+            let mut want = v.clone();
+            want.sort_unstable();
+            heap_sort(&mut v);
+            assert_eq!(v, want);
+        }
     }
 
     #[test]

@@ -325,6 +325,15 @@ impl<const W: usize> TryFrom<RawConditioning<W>> for Conditioning<W> {
                     | u8::from(d >> bit & 1 == 1) << 3;
                 return Err(DebounceError::Latched { point, count });
             }
+            // A pending pulse exists only on a latched point: one elsewhere would read as a
+            // phantom input for a cycle.
+            let pending = raw.pending.words.get(w).copied().unwrap_or(0);
+            let stray = pending & !latched;
+            if stray != 0 {
+                let bit = usize::try_from(stray.trailing_zeros()).unwrap_or(0);
+                let point = w.saturating_mul(POINTS_PER_WORD).saturating_add(bit);
+                return Err(DebounceError::PendingNotLatched { point });
+            }
         }
         Ok(Conditioning {
             latched: raw.latched,
@@ -367,6 +376,12 @@ pub enum DebounceError {
         /// The debounce count it has or was to get (above 1).
         count: u8,
     },
+    /// Stored conditioning (deserialized) holds a captured pulse on a point that is not
+    /// latched: it would read as a phantom input for one cycle.
+    PendingNotLatched {
+        /// The point.
+        point: usize,
+    },
 }
 
 impl fmt::Display for DebounceError {
@@ -382,6 +397,10 @@ impl fmt::Display for DebounceError {
                 f,
                 "point {point} cannot be latched and debounced (count {count}) at once: \
                  a latch keeps pulses a debounce would drop; latched points keep count 1"
+            ),
+            DebounceError::PendingNotLatched { point } => write!(
+                f,
+                "stored conditioning holds a captured pulse on point {point}, which is not latched"
             ),
         }
     }
@@ -406,6 +425,7 @@ impl<const W: usize> Conditioning<W> {
 
     /// Latches (or stops latching) short pulses on `point`. A point whose debounce count is
     /// above 1 is refused with [`DebounceError::Latched`]: it cannot be latched and debounced.
+    /// Stopping the latch forgets a pulse captured and not yet read.
     pub fn set_latched(&mut self, point: usize, latched: bool) -> Result<(), DebounceError> {
         if point >= Image::<W>::POINTS {
             return Err(DebounceError::Point(PointError {
@@ -416,6 +436,13 @@ impl<const W: usize> Conditioning<W> {
         let count = self.debounce(point);
         if latched && count != 1 {
             return Err(DebounceError::Latched { point, count });
+        }
+        if !latched {
+            // A pulse captured while the point was latched is forgotten with the latch: an
+            // unlatched point reads only the hardware.
+            self.pending
+                .set(point, false)
+                .map_err(DebounceError::Point)?;
         }
         self.latched
             .set(point, latched)
@@ -657,5 +684,23 @@ mod tests {
         assert!(out.get(4) && !out.get(6));
         c.condition(&[0], &mut out);
         assert!(!out.get(4));
+    }
+
+    #[test]
+    fn an_unlatched_point_never_reads_a_pulse_captured_while_it_was_latched() {
+        // Every point of two words: capture while latched, unlatch, then the point reads only
+        // the hardware (off), and latching it again does not bring the old pulse back.
+        for point in 0..Image::<2>::POINTS {
+            let mut c: Conditioning<2> = Conditioning::new();
+            c.set_latched(point, true).unwrap();
+            c.capture(&[u16::MAX; 2]);
+            c.set_latched(point, false).unwrap();
+            let mut out = Image::new();
+            c.condition(&[0; 2], &mut out);
+            assert_eq!(out, Image::new(), "point {point}: a phantom pulse");
+            c.set_latched(point, true).unwrap();
+            c.condition(&[0; 2], &mut out);
+            assert_eq!(out, Image::new(), "point {point}: the old pulse came back");
+        }
     }
 }

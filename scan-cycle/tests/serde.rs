@@ -60,6 +60,31 @@ fn bad_stored_state_is_refused() {
         err.contains("point 3 cannot be latched and debounced (count 7)"),
         "{err}"
     );
+    // A captured pulse on a point that is not latched (a torn or tampered block) is refused, on
+    // every point: it would read as a phantom input for a cycle. On a latched point it is kept.
+    for point in 0..32usize {
+        let (w, bit) = (point / 16, point % 16);
+        let mut value = serde_json::to_value(Conditioning::<2>::new()).unwrap();
+        value["pending"]["words"][w] = serde_json::json!(1u16 << bit);
+        let err = serde_json::from_value::<Conditioning<2>>(value.clone())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains(&format!(
+                "captured pulse on point {point}, which is not latched"
+            )),
+            "{err}"
+        );
+        value["latched"]["words"][w] = serde_json::json!(1u16 << bit);
+        let back = serde_json::from_value::<Conditioning<2>>(value).unwrap();
+        let mut out = regler_scan_cycle::Image::<2>::new();
+        let mut back = back;
+        back.condition(&[0; 2], &mut out);
+        assert!(
+            out.get(point),
+            "point {point}: the stored pulse on a latched point is read"
+        );
+    }
     // Every count above 1 on a latched point is refused; a latched point with count 1 comes back.
     for k in 1..=15u8 {
         let mut c: Conditioning<2> = Conditioning::new();
