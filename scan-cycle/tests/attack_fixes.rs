@@ -1021,3 +1021,36 @@ fn check_watchdog_with_never_trips_on_a_signals_halt_in_any_order() {
         assert!(plc.check_watchdog_with(&mut io, &s), "{order:?}");
     }
 }
+
+/// `set_now_ms`: the first cycle after it sees exactly the value set, the clock counts on from
+/// there (wrapping at 2³² ms), and a timer kept across the "power cycle" (a new executive) goes
+/// on where it stood — without serde, so every build checks it.
+#[test]
+fn set_now_ms_restores_the_program_clock() {
+    for saved in [0u32, 1, 123_456_789, u32::MAX - 20] {
+        let mut io = simple();
+        io.t = 999;
+        let mut plc: Executive<1, 1> = Executive::new(CycleConfig::source());
+        plc.set_now_ms(saved);
+        let mut ton = Ton::new(1_000);
+        let mut seen = Vec::new();
+        let mut fired = None;
+        for i in 0..30u32 {
+            plc.cycle(&mut io, |s| {
+                seen.push(s.now_ms);
+                if ton.call(true, s.now_ms) && fired.is_none() {
+                    fired = Some(i);
+                }
+            })
+            .unwrap();
+            io.t = io.t.wrapping_add(50_000);
+        }
+        let want: Vec<u32> = (0..30).map(|i| saved.wrapping_add(50 * i)).collect();
+        assert_eq!(seen, want, "saved {saved}");
+        assert_eq!(fired, Some(20), "saved {saved}");
+        // Between cycles: the µs since the last cycle are dropped.
+        io.t = io.t.wrapping_add(12_345_000);
+        plc.set_now_ms(7);
+        plc.cycle(&mut io, |s| assert_eq!(s.now_ms, 7)).unwrap();
+    }
+}
