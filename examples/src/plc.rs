@@ -612,7 +612,12 @@ impl Simulator {
                 let n = n
                     .parse()
                     .map_err(|_| format!("break cycle takes a number, got {n}"))?;
-                self.breakpoints.push(Breakpoint::Cycle(n));
+                // A cycle already run can never be reached again: refused, as `run` does.
+                let b = Breakpoint::Cycle(n);
+                self.plc
+                    .check_breakpoints(&[b])
+                    .map_err(|e| e.to_string())?;
+                self.breakpoints.push(b);
             }
             ["break", side, p, lvl] => {
                 let (input, p, on) = (io_side(Some(side))?, point(Some(p))?, level(Some(lvl))?);
@@ -776,5 +781,9 @@ mod tests {
         assert!(sim.command("fly").unwrap_err().contains("unknown command"));
         assert!(sim.command("run many").is_err());
         assert!(sim.command("break in part off").is_err());
+        // Cycle 15 has run: a breakpoint there could never fire.
+        let passed = sim.command("break cycle 15").unwrap_err();
+        assert!(passed.contains("cycle 15 can never fire"), "{passed}");
+        sim.command("break cycle 0").unwrap_err();
     }
 }

@@ -226,6 +226,13 @@ impl fmt::Display for Breakpoint {
 pub enum BreakpointError {
     /// `Breakpoint::Cycle(0)`: cycles are numbered from 1.
     CycleZero,
+    /// `Breakpoint::Cycle(cycle)` for a cycle already run: the count only grows.
+    CyclePassed {
+        /// The cycle asked for.
+        cycle: u64,
+        /// Cycles run so far ([`Executive::cycle_count`]).
+        count: u64,
+    },
     /// An input point the executive does not have.
     NoSuchInput {
         /// The point asked for.
@@ -248,6 +255,10 @@ impl fmt::Display for BreakpointError {
             BreakpointError::CycleZero => {
                 f.write_str("breakpoint at cycle 0 can never fire: cycles are numbered from 1")
             }
+            BreakpointError::CyclePassed { cycle, count } => write!(
+                f,
+                "breakpoint at cycle {cycle} can never fire: {count} cycles have run already"
+            ),
             BreakpointError::NoSuchInput { point, inputs } => write!(
                 f,
                 "breakpoint on input {point} can never fire: there are {inputs} inputs (0 to {})",
@@ -432,10 +443,15 @@ pub struct Executive<const IW: usize, const OW: usize> {
     clock_ms: u32,
     clock_rest_us: u32,
     clock_last_us: Option<u32>,
+    /// The last reading, when it was behind `clock_last_us`.
+    clock_behind_us: Option<u32>,
     last_end_us: Option<u32>,
     watchdog_trips: u32,
     /// The count of `Signals` trips and power failures the last cycle started with.
     seen_events: u32,
+    /// The count of `Signals` trips and power failures the watchdog was last armed under
+    /// ([`check_watchdog_with`](Executive::check_watchdog_with)).
+    watch_events: u32,
 }
 
 impl<const IW: usize, const OW: usize> Executive<IW, OW> {
@@ -463,6 +479,8 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
             clock_ms: 0,
             clock_rest_us: 0,
             clock_last_us: None,
+            clock_behind_us: None,
+            watch_events: 0,
         }
     }
 
@@ -485,8 +503,12 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
     /// returns the halt ([`Halt::Watchdog`], [`Halt::PowerFail`]) and the safe outputs are the
     /// last thing written: a halt before the write leaves the write out, one during or after it
     /// makes the cycle write [`Signals::safe_outputs`] once more after its own write. Such a
-    /// cycle is not counted ([`cycle_count`](Executive::cycle_count), statistics, images and
-    /// [`Io::kick_watchdog`] as before it). The check before the write and the check after it
+    /// cycle is not counted ([`cycle_count`](Executive::cycle_count), statistics, input and
+    /// output images and [`Io::kick_watchdog`] as before it), and every latched pulse it read
+    /// (captured by [`Signals::capture`] or [`capture`](Executive::capture), or on in its raw
+    /// read) is pending again for the next cycle. Its reading does advance the debounce counts
+    /// (it was a real reading of the plant), and its start counts for
+    /// [`now_ms`](Executive::now_ms) up to the halt. The check before the write and the check after it
     /// are each a few word operations in a critical section; the bus write itself runs with
     /// interrupts on.
     ///
@@ -529,6 +551,8 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         if let Some(captured) = begin.captured {
             self.conditioning.capture(&captured);
         }
+        // What a halted cycle puts back: the input images as before it.
+        let (raw_before, inputs_before) = (self.raw, self.inputs);
         let start = io.now_us();
         if let Some(interval) = self.last_start_us.and_then(|last| forward_us(last, start)) {
             let jitter = interval.abs_diff(self.config.period_us);
@@ -538,6 +562,9 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         // Level A: all inputs in.
         io.read_inputs(&mut self.raw);
         self.conditioning.condition(&self.raw, &mut self.inputs);
+        // The readings before forcing: a latched point is not debounced, so its bit here is
+        // what the cycle read (a pending pulse, a capture or the raw word).
+        let read = self.inputs;
         self.force_inputs.apply(&mut self.inputs);
         // Level B: the program, on the images only.
         self.next = self.previous;
@@ -554,15 +581,41 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         // Level A: all outputs out, images swapped. The write runs with interrupts on; a halt
         // that came before it leaves it out, one during or after it is answered by writing
         // the safe outputs again, so they are the last thing on the bus either way.
-        signals.commit(begin.events)?;
-        io.write_outputs(self.next.words());
-        let end = io.now_us();
-        if let Err(halt) = signals.confirm(begin.events, end) {
-            if let Some(safe) = signals.safe_outputs() {
-                io.write_outputs(safe.words());
+        let overtaken = match signals.commit(begin.events) {
+            Err(halt) => Some(halt),
+            Ok(()) => {
+                io.write_outputs(self.next.words());
+                let end = io.now_us();
+                match signals.confirm(begin.events, end) {
+                    Ok(()) => {
+                        self.watch_events = begin.events;
+                        self.finish(io, cycle, start, end);
+                        None
+                    }
+                    Err(halt) => {
+                        if let Some(safe) = signals.safe_outputs() {
+                            io.write_outputs(safe.words());
+                        }
+                        Some(halt)
+                    }
+                }
             }
-            return Err(halt);
+        };
+        match overtaken {
+            None => Ok(()),
+            Some(halt) => {
+                // Not counted: the input images as before the cycle, and every pulse it read
+                // (pending, captured or in the raw read) pending again for the next cycle.
+                self.conditioning.capture(read.words());
+                self.raw = raw_before;
+                self.inputs = inputs_before;
+                Err(halt)
+            }
         }
+    }
+
+    /// The end of a cycle that ran to its confirmed write: kick, count, swap, statistics.
+    fn finish<I: Io<IW, OW>>(&mut self, io: &mut I, cycle: u64, start: u32, end: u32) {
         io.kick_watchdog();
         self.cycle = cycle;
         self.previous = self.next;
@@ -578,26 +631,49 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         if busy >= self.config.period_us {
             s.overruns = s.overruns.saturating_add(1);
         }
-        Ok(())
     }
 
     /// Advances the program's millisecond clock by the µs elapsed since the last cycle; a
     /// reading behind the last one (the clock stepped back) adds nothing and the last reading
     /// stays the reference.
     fn tick_clock(&mut self, now_us: u32) -> u32 {
-        match self.clock_last_us {
-            Some(last) => {
-                if let Some(step) = forward_us(last, now_us) {
-                    let total = u64::from(self.clock_rest_us).saturating_add(u64::from(step));
-                    let ms = u32::try_from(total / 1000).unwrap_or(u32::MAX);
-                    self.clock_ms = self.clock_ms.wrapping_add(ms);
-                    self.clock_rest_us = u32::try_from(total % 1000).unwrap_or(0);
-                    self.clock_last_us = Some(now_us);
-                }
+        let Some(last) = self.clock_last_us else {
+            self.clock_last_us = Some(now_us);
+            self.clock_behind_us = None;
+            return self.clock_ms;
+        };
+        // Forward from the reference; or forward from the last reading, which was behind it:
+        // two readings agree the clock has a new base, and it counts on from there.
+        let step = forward_us(last, now_us).or_else(|| {
+            self.clock_behind_us
+                .and_then(|behind| forward_us(behind, now_us))
+        });
+        match step {
+            Some(step) => {
+                let total = u64::from(self.clock_rest_us).saturating_add(u64::from(step));
+                let ms = u32::try_from(total / 1000).unwrap_or(u32::MAX);
+                self.clock_ms = self.clock_ms.wrapping_add(ms);
+                self.clock_rest_us = u32::try_from(total % 1000).unwrap_or(0);
+                self.clock_last_us = Some(now_us);
+                self.clock_behind_us = None;
             }
-            None => self.clock_last_us = Some(now_us),
+            None => self.clock_behind_us = Some(now_us),
         }
         self.clock_ms
+    }
+
+    /// Sets the program's millisecond clock ([`now_ms`](Executive::now_ms)) to `ms`, for a
+    /// start-up that restores retentive timers: save `now_ms()` with the timers, and after the
+    /// power cycle call this with the saved value before the first cycle. The first cycle then
+    /// sees `now_ms == ms`, and the clock counts on from there: a restored timer goes on where
+    /// it stood (the time the power was off is not program time, as with
+    /// [`power_fail`](Executive::power_fail)). Called between cycles, the next cycle starts
+    /// from `ms` plus nothing: the µs since the last cycle are dropped.
+    pub fn set_now_ms(&mut self, ms: u32) {
+        self.clock_ms = ms;
+        self.clock_rest_us = 0;
+        self.clock_last_us = None;
+        self.clock_behind_us = None;
     }
 
     /// The program's millisecond clock at the start of the last cycle (wrapping at 2³² ms),
@@ -605,9 +681,15 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
     ///
     /// It counts the `Io` clock's µs between cycle starts, carried exactly across the µs
     /// clock's wrap. A reading 2³¹ µs or more (35.8 minutes) ahead of the last one, wrapping,
-    /// is the clock stepping back (a µs counter built from a 16-bit timer and an overflow
-    /// interrupt does, for a moment): it adds no time, and the clock counts on from the last
-    /// reading before it. So a gap between two cycles counts only if it is under 2³¹ µs: a
+    /// is behind it (a µs counter built from a 16-bit timer and an overflow interrupt steps
+    /// back for a moment; a clock may be set back; a gap of 2³¹ µs or more looks the same): it
+    /// adds no time. The next reading counts on from the last reading before it if it is
+    /// forward of that; otherwise, if it is forward of the behind reading, the two readings
+    /// agree the clock has a new base, and it counts on from the behind reading. So the clock
+    /// stands still for one cycle at most, the one that first read the new base (that
+    /// interval is lost); a glitch read once costs nothing, and one read twice running, d
+    /// behind the reference both times, gains d less the interval from the reference to the
+    /// first glitch reading. A gap between two cycles counts only if it is under 2³¹ µs: a
     /// `u32` µs clock cannot tell a longer one from a shorter one. Halts do not count: after a
     /// power failure or a watchdog trip (of the executive or of [`Signals`]) the clock goes on
     /// from where it stood at the last cycle's start, however long the halt lasted — timers
@@ -684,7 +766,12 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
     /// This sees a hang only between cycles, since [`cycle`](Executive::cycle) holds the
     /// executive; to catch a program that hangs inside a cycle, check from a timer interrupt
     /// through [`Signals::check_watchdog`] and run the cycles with
-    /// [`cycle_with`](Executive::cycle_with).
+    /// [`cycle_with`](Executive::cycle_with). With `cycle_with`, check from the idle loop
+    /// with [`check_watchdog_with`](Executive::check_watchdog_with): this one does not see a
+    /// [`Signals`] outage or trip.
+    ///
+    /// A clock that steps back for good holds the watchdog off only until the next cycle
+    /// ends: that end is the new reference.
     pub fn check_watchdog<I: Io<IW, OW>>(&mut self, io: &mut I) -> bool {
         if self.tripped {
             return true;
@@ -709,6 +796,38 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
             return true;
         }
         false
+    }
+
+    /// [`check_watchdog`](Executive::check_watchdog) for an executive whose cycles run with
+    /// [`cycle_with`](Executive::cycle_with) under `signals`: the idle loop's check must use
+    /// this one. It never trips while `signals` says the power has failed or its watchdog has
+    /// tripped (the interrupt handlers have the plant safe; an outage is not a hang), and after
+    /// any [`Signals`] trip or power failure it re-arms from this check, as after the
+    /// executive's own resume or reset — so neither an outage nor the operator's time before a
+    /// [`Signals::reset_watchdog`] trips it. Returns whether the executive's own watchdog is
+    /// (now) tripped.
+    ///
+    /// The plain [`check_watchdog`](Executive::check_watchdog) cannot see [`Signals`]: with
+    /// `cycle_with` it counts a `Signals` outage or trip as a hang and trips after one longer
+    /// than the limit. Do not mix them.
+    pub fn check_watchdog_with<I: Io<IW, OW>>(
+        &mut self,
+        io: &mut I,
+        signals: &Signals<IW, OW>,
+    ) -> bool {
+        if self.tripped {
+            return true;
+        }
+        let (events, halted) = signals.watch_state();
+        if halted {
+            return false;
+        }
+        if events != self.watch_events {
+            self.watch_events = events;
+            self.last_end_us = None;
+            self.watch_from_us = None;
+        }
+        self.check_watchdog(io)
     }
 
     /// The operator has looked at the trip: cycles may run again from the safe outputs as the
@@ -881,7 +1000,8 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         }
     }
 
-    /// Refuses breakpoints that could never fire: `Cycle(0)` (cycles are numbered from 1) and
+    /// Refuses breakpoints that could never fire: `Cycle(0)` (cycles are numbered from 1),
+    /// `Cycle(n)` for a cycle already run (`n ≤ cycle_count()`: the count only grows), and
     /// points beyond the images (`16 × IW` inputs, `16 × OW` outputs).
     pub fn check_breakpoints(&self, breakpoints: &[Breakpoint]) -> Result<(), BreakpointError> {
         let inputs = Image::<IW>::POINTS;
@@ -889,6 +1009,12 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         for &b in breakpoints {
             match b {
                 Breakpoint::Cycle(0) => return Err(BreakpointError::CycleZero),
+                Breakpoint::Cycle(n) if n <= self.cycle => {
+                    return Err(BreakpointError::CyclePassed {
+                        cycle: n,
+                        count: self.cycle,
+                    });
+                }
                 Breakpoint::InputOn(point) if point >= inputs => {
                     return Err(BreakpointError::NoSuchInput { point, inputs });
                 }
@@ -1300,9 +1426,11 @@ mod tests {
         assert_eq!((n, why), (3, None));
         // A breakpoint passed is not hit again at once: the cycle breakpoint fires once, and
         // `cont` runs on from an output breakpoint to its next rising edge.
-        let (n, why) = plc
-            .run(&mut io, 5, &[Breakpoint::Cycle(4)], program, |_, _| {})
-            .unwrap();
+        assert_eq!(
+            plc.run(&mut io, 5, &[Breakpoint::Cycle(4)], program, |_, _| {}),
+            Err(BreakpointError::CyclePassed { cycle: 4, count: 9 })
+        );
+        let (n, why) = plc.run(&mut io, 5, &[], program, |_, _| {}).unwrap();
         assert_eq!((n, why), (5, None));
         // A condition breakpoint: both outputs 0 and 2 on.
         let both = |s: &mut Scan<'_, 2, 1>| {

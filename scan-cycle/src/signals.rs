@@ -219,6 +219,12 @@ impl<const IW: usize, const OW: usize> Signals<IW, OW> {
         });
     }
 
+    /// The count of trips and power failures so far, and whether cycles are refused now.
+    pub(crate) fn watch_state(&self) -> (u32, bool) {
+        let s = self.read();
+        (s.events, halt_of(&s).is_some())
+    }
+
     /// Whether the watchdog has tripped (and not been reset).
     #[must_use]
     pub fn tripped(&self) -> bool {
