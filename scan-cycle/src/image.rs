@@ -692,9 +692,13 @@ mod tests {
         // the hardware (off), and latching it again does not bring the old pulse back.
         for point in 0..Image::<2>::POINTS {
             let mut c: Conditioning<2> = Conditioning::new();
+            assert!(!c.latched(point));
             c.set_latched(point, true).unwrap();
+            assert!(c.latched(point));
+            assert!((0..Image::<2>::POINTS).all(|p| c.latched(p) == (p == point)));
             c.capture(&[u16::MAX; 2]);
             c.set_latched(point, false).unwrap();
+            assert!(!c.latched(point));
             let mut out = Image::new();
             c.condition(&[0; 2], &mut out);
             assert_eq!(out, Image::new(), "point {point}: a phantom pulse");
