@@ -11,10 +11,12 @@
     )
 )]
 
+mod startup;
 mod stretch;
 mod table;
 mod tracker;
 
+pub use startup::{StartUp, start_up};
 pub use stretch::{Measurement, StretchConfig, StretchConfigError, StretchMeter};
 pub use table::{CorrectionError, DistanceTable, TableError, correct};
 pub use tracker::{

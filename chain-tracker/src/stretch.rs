@@ -12,7 +12,9 @@ use crate::table::stretch_per_mille;
 pub struct StretchConfig {
     /// SIA: pulses between the initiators when the chain was new (the static list's reference).
     pub sia: u32,
-    /// How many consecutive equal measurements a new DIA needs before it is accepted.
+    /// How many consecutive equal measurements a new DIA needs before it is accepted; any other
+    /// measurement in between (the accepted DIA, another value, or an
+    /// [`Implausible`](Measurement::Implausible) one) starts the count again.
     /// 2 (the default) means a single missed or extra pulse never causes a recalculation:
     /// the next measurement returns to the old value and the odd one is forgotten.
     pub confirmations: u8,
@@ -23,6 +25,10 @@ pub struct StretchConfig {
     /// in all, so the meter follows it for life. Anywhere back towards SIA, and up to this far
     /// beyond SIA (per mille of SIA), is plausible: a chain that was shortened or replaced,
     /// which still needs `confirmations` equal measurements.
+    ///
+    /// The band is never narrower than one pulse: one pulse beyond either end is always
+    /// plausible, whatever this value (0, or SIA 100 with 5 ‰, would otherwise be a band of less
+    /// than one pulse, and the meter could never follow a chain that stretches).
     pub plausible_per_mille: u32,
     /// Stretch (per mille, as [`StretchMeter::stretch_per_mille`]) past which the alarm is on:
     /// time to shorten the chain. Default 20 (2 %, 8 m on a 400 m chain).
@@ -86,8 +92,10 @@ pub enum Measurement {
         /// The new DIA.
         dia: u32,
     },
-    /// More than `plausible_per_mille` outside the range between the accepted DIA and SIA (see
-    /// [`StretchConfig::plausible_per_mille`]), or 0: counted as a fault, ignored.
+    /// More than `plausible_per_mille` (and more than one pulse) outside the range between the
+    /// accepted DIA and SIA (see [`StretchConfig::plausible_per_mille`]), or 0: counted as a
+    /// fault and otherwise ignored, except that it breaks "in a row": a half-confirmed
+    /// candidate is forgotten and must be measured `confirmations` times again.
     Implausible {
         /// The value measured.
         dia: u32,
@@ -238,9 +246,16 @@ impl StretchMeter {
         } else {
             (long, dia.saturating_sub(long))
         };
-        let limit = u64::from(end).saturating_mul(u64::from(self.config.plausible_per_mille));
+        // The band is at least one pulse: a chain stretches by whole pulses, and a band narrower
+        // than one (`plausible_per_mille` 0, or `end · plausible_per_mille` < 1000) could never
+        // follow it.
+        let limit = u64::from(end)
+            .saturating_mul(u64::from(self.config.plausible_per_mille))
+            .max(1000);
         if dia == 0 || u64::from(off).saturating_mul(1000) > limit {
             self.rejected = self.rejected.saturating_add(1);
+            // A fault breaks "in a row": the candidate must be measured again, from one.
+            self.candidate = None;
             return Measurement::Implausible { dia };
         }
         if dia == self.accepted {
@@ -263,6 +278,9 @@ impl StretchMeter {
 
     /// Makes the meter agree with the distance table after a restart: takes the table's DIA
     /// (`tracker.table().dia()`) as the accepted one and forgets a half-confirmed candidate.
+    /// Only for a table restored from its snapshot: after a refused snapshot the table is at
+    /// SIA and the meter's DIA is the one to keep — [`start_up`](crate::start_up) does the
+    /// right thing for each case.
     /// Returns whether the meter's DIA changed; a DIA of 0 is an error and changes nothing.
     ///
     /// The meter and the tracker are stored apart, so power can fail between an

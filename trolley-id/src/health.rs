@@ -9,6 +9,9 @@ const NO_READ: u8 = 1 << 1;
 const DISAGREEMENT: u8 = 1 << 2;
 const FAULTY: u8 = 1 << 3;
 
+/// A limit (‰) at or above which a symptom's share can never exceed it: that symptom is off.
+const SWITCHED_OFF: u32 = 1000;
+
 /// Counts of passages at one reader: how many there were and how many showed each symptom.
 ///
 /// A passage counts once per symptom however many of its readings showed it.
@@ -84,7 +87,9 @@ impl HealthStats {
 /// no_read_per_mille / 1000`, compared exactly (counts cross-multiplied, nothing rounded). It
 /// clears only when both shares are at or below half their limits (exactly, so half of 5 ‰ is
 /// 2.5 ‰), so a reader near its limit does not make the alarm chatter. A limit of 1000 ‰ or more
-/// can never be exceeded: it switches that symptom's alarm off.
+/// can never be exceeded: it switches that symptom off, and a switched-off symptom takes no part
+/// in raising or clearing (a reader disagreeing on most passages, with disagreements switched
+/// off, clears a no-read alarm as soon as the no-reads are at or below half their limit).
 ///
 /// [`ReaderHealth::new`] refuses limits whose `min_passages` exceeds the window `W`: the window
 /// could never hold that many passages and the alarm could never be raised.
@@ -282,10 +287,14 @@ impl<const W: usize> ReaderHealth<W> {
             self.alarms_raised = self.alarms_raised.saturating_add(1);
             return Some(AlarmChange::Raised);
         }
-        // share <= limit/2 ‰  ⇔  count · 2000 <= limit · passages.
+        // share <= limit/2 ‰  ⇔  count · 2000 <= limit · passages. A switched-off symptom
+        // (limit >= 1000 ‰, never exceeded) takes no part: half of 1000 ‰ is 500 ‰, and a reader
+        // disagreeing on more than half its passages would keep a no-read alarm on for ever.
+        let at_half =
+            |count: u32, limit: u32| limit >= SWITCHED_OFF || scaled(count, 2000) <= of(limit);
         if self.alarm
-            && scaled(w.no_reads, 2000) <= of(l.no_read_per_mille)
-            && scaled(w.disagreements, 2000) <= of(l.disagreement_per_mille)
+            && at_half(w.no_reads, l.no_read_per_mille)
+            && at_half(w.disagreements, l.disagreement_per_mille)
         {
             self.alarm = false;
             return Some(AlarmChange::Cleared);

@@ -223,7 +223,8 @@ proptest! {
 
 /// The alarm rule in the docs' words, over shares computed as real numbers: raised when the
 /// window holds at least `min_passages` and a share exceeds its limit, cleared when both shares
-/// are at or below half their limits.
+/// are at or below half their limits; a limit of 1000 ‰ or more switches its symptom off (no part
+/// in raising or clearing).
 fn alarm_model<const W: usize>(
     limits: AlarmLimits,
     stream: &[(bool, bool)],
@@ -258,7 +259,10 @@ fn alarm_model<const W: usize>(
         {
             alarm = true;
             Some(AlarmChange::Raised)
-        } else if alarm && no_reads <= nl / 2.0 && disagreements <= dl / 2.0 {
+        } else if alarm
+            && (nl >= 1.0 || no_reads <= nl / 2.0)
+            && (dl >= 1.0 || disagreements <= dl / 2.0)
+        {
             alarm = false;
             Some(AlarmChange::Cleared)
         } else {
@@ -271,7 +275,7 @@ fn alarm_model<const W: usize>(
 }
 
 fn limits_for(window: u32) -> impl proptest::strategy::Strategy<Value = AlarmLimits> {
-    (0u32..1100, 0u32..1100, 0..=window).prop_map(
+    (0u32..2100, 0u32..2100, 0..=window).prop_map(
         |(no_read_per_mille, disagreement_per_mille, min_passages)| AlarmLimits {
             no_read_per_mille,
             disagreement_per_mille,
