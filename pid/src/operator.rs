@@ -10,7 +10,7 @@ use core::fmt;
 
 use crate::alarm::{Alarm, AlarmState};
 use crate::config::{Config, ConfigError, Kind, Parameter};
-use crate::controller::{Inputs, Pid};
+use crate::controller::{Inputs, Pid, check_reach};
 use crate::real::Real;
 use crate::scalar::Scalar;
 use crate::scaling::Scaling;
@@ -810,6 +810,8 @@ impl<T: Scalar, F: Real> Station<T, F> {
         let staged = Staged::new(params, scaling, limits)?;
         check_scale::<T, F>(scaling)?;
         let pid = Pid::<T>::new(&params.config).map_err(EditError::Config)?;
+        check_reach::<T, F>(&params.config, scaling.min(), scaling.max())
+            .map_err(EditError::Config)?;
         let y = pid.output().to_real();
         Ok(Station {
             pid,
@@ -875,7 +877,9 @@ impl<T: Scalar, F: Real> Station<T, F> {
         // The active set is copied only when a commit may have to be refused.
         let previous = self.staged.active;
         if let Some(p) = self.staged.take_commit() {
-            match self.pid.set_config(&p.config) {
+            let scaling = self.staged.scaling;
+            let fits = check_reach::<T, F>(&p.config, scaling.min(), scaling.max());
+            match fits.and_then(|()| self.pid.set_config(&p.config)) {
                 Ok(()) => {
                     self.commits = self.commits.saturating_add(1);
                     self.refused = None;

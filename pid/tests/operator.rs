@@ -110,10 +110,13 @@ fn a_commit_puts_into_force_the_set_as_it_was_when_committed() {
     assert!(checked > 90_000);
 }
 
+/// A P controller whose gain (1/64) keeps every term within I16F16 on any scale the type
+/// holds, so that the scale checks alone decide.
 fn p_params<F: regler_pid::Real>(setpoint: F, rfel: F) -> Parameters<F> {
     Parameters {
         config: Config {
             kind: Kind::P,
+            k: F::one() / F::from_u16(64),
             ..Config::default()
         },
         setpoint,
