@@ -1,13 +1,16 @@
 //! The README's rule for what a fixed-point `Station` accepts (`ConfigError::OutOfReach`),
 //! checked against the closed form the README gives (a model, not the implementation).
 #![cfg(feature = "fixed")]
-#![allow(clippy::float_cmp, clippy::unwrap_used, clippy::arithmetic_side_effects)]
+#![allow(
+    clippy::float_cmp,
+    clippy::unwrap_used,
+    clippy::arithmetic_side_effects
+)]
 
 use fixed::types::{I16F16, I32F32};
 use proptest::prelude::*;
 use regler_pid::{
-    Config, ConfigError, EditError, Kind, OperatorLimits, Parameters, Pid, Scalar, Scaling,
-    Station,
+    Config, ConfigError, EditError, Kind, OperatorLimits, Parameters, Pid, Scalar, Scaling, Station,
 };
 
 fn params(config: Config<f64>, setpoint: f64) -> Parameters<f64> {
@@ -137,7 +140,6 @@ fn worked(k: f64, b: f64) -> Config<f64> {
     }
 }
 
-
 /// README's worked examples (I16F16, PI, b = 1, Tt unset, h/Ti = 0.1, output 0..10 V):
 /// K·M ≤ 27 822, so K up to 278 on 0..100 and up to 0.927 on 0..30 000; K = 2, b = 0 on
 /// 0..30 000 is refused.
@@ -156,7 +158,11 @@ fn the_worked_examples_hold() {
     assert!(st(0.928, 1.0, 30_000.0).is_err());
     assert!(st(2.0, 0.0, 30_000.0).is_err());
     // I32F32 holds all of them.
-    for (k, b, m) in [(279.0, 1.0, 100.0), (0.928, 1.0, 30_000.0), (2.0, 0.0, 30_000.0)] {
+    for (k, b, m) in [
+        (279.0, 1.0, 100.0),
+        (0.928, 1.0, 30_000.0),
+        (2.0, 0.0, 30_000.0),
+    ] {
         let s = Station::<I32F32, f64>::new(
             params(worked(k, b), m / 2.0),
             Scaling::new(0.0, m).unwrap(),
