@@ -4,7 +4,8 @@
 #![allow(
     clippy::float_cmp,
     clippy::unwrap_used,
-    clippy::arithmetic_side_effects
+    clippy::arithmetic_side_effects,
+    clippy::cast_possible_truncation
 )]
 
 use fixed::types::{I16F16, I32F32};
