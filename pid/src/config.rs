@@ -295,6 +295,22 @@ pub enum ConfigError<F = f64> {
         /// The coefficient's value, computed in the configuration's type.
         exact: F,
     },
+    /// The parameter is valid and every coefficient fits the controller's number type, but a
+    /// product or sum the update computes can reach beyond the type's range for a set-point and
+    /// measurement on the scale (a fixed-point `Station` would saturate it and lose the
+    /// set-point): `K·(b·r − y)` = 60 000 for K = 2 on a 0..30 000 scale in `I16F16`.
+    /// Checked by [`Station`](crate::Station) at start-up and at every commit.
+    OutOfReach {
+        /// The parameter that sets the term.
+        parameter: Parameter,
+        /// Its value.
+        value: F,
+        /// The term, e.g. "K·(b·r − y)".
+        term: &'static str,
+        /// The largest magnitude the term can reach on the scale (an upper bound, computed in
+        /// the configuration's type).
+        reach: F,
+    },
 }
 
 impl<F: Real> fmt::Display for ConfigError<F> {
@@ -334,6 +350,17 @@ impl<F: Real> fmt::Display for ConfigError<F> {
                     "{parameter} = {value} gives {coefficient} = {exact}, which the controller's number type cannot hold within 0.1 %"
                 )
             }
+            ConfigError::OutOfReach {
+                parameter,
+                value,
+                term,
+                reach,
+            } => {
+                write!(
+                    f,
+                    "{parameter} = {value} lets {term} reach {reach} on the scale, beyond the controller's number type"
+                )
+            }
         }
     }
 }
@@ -348,7 +375,8 @@ impl<F> ConfigError<F> {
         match self {
             ConfigError::NotFinite { parameter, .. }
             | ConfigError::OutOfRange { parameter, .. }
-            | ConfigError::Unrepresentable { parameter, .. } => *parameter,
+            | ConfigError::Unrepresentable { parameter, .. }
+            | ConfigError::OutOfReach { parameter, .. } => *parameter,
             ConfigError::LimitsReversed { .. } => Parameter::Ymax,
             ConfigError::TrackingUnstable { .. } => Parameter::Tt,
         }

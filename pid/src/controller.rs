@@ -36,7 +36,8 @@ impl Faults {
         self.0 & Faults::NON_FINITE_INPUT != 0
     }
 
-    /// The computation overflowed (a float became infinite): the output and state were held.
+    /// The computation overflowed (a float became infinite, or a fixed-point product or sum
+    /// saturated): the output and state were held.
     #[must_use]
     pub const fn overflow(self) -> bool {
         self.0 & Faults::OVERFLOW != 0
@@ -210,6 +211,8 @@ struct Sample<T> {
     d: T,
     u: T,
     i: T,
+    /// A fixed-point product or sum of the sample saturated (always false for floats).
+    saturated: bool,
 }
 
 /// The coefficients of one configuration, converted and checked, before any is applied.
@@ -348,6 +351,114 @@ fn hold<T: Scalar, F: Real>(
     }
 }
 
+/// How close to the end of `T`'s range a term may reach before a [`Station`](crate::Station)
+/// refuses its configuration: within 2⁻⁸ of `T::MAX`, a margin that covers the rounding of
+/// the converted coefficients (at most [`TOLERANCE`]) and of each fixed-point operation.
+const REACH_MARGIN: f32 = 1.0 / 256.0;
+
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "arithmetic on Real (sealed: f32 or f64) cannot panic or wrap; a non-finite bound is refused"
+)]
+/// Checks that no product or sum the update computes can leave `T`'s range for a set-point and
+/// a measurement anywhere in `lo..=hi` (and no feed-forward or tracking value): each term's
+/// largest magnitude, bounded by the triangle inequality from the corners of the scale (every
+/// term is affine in r and y), the state bounds ([`STATE_BOUND`]) and the output limits, must
+/// stay below `T::MAX`·(1 − 2⁻⁸). The error names the first term that does not and the
+/// parameter that sets it.
+pub(crate) fn check_reach<T: Scalar, F: Real>(
+    config: &Config<F>,
+    lo: F,
+    hi: F,
+) -> Result<(), ConfigError<F>> {
+    config.validate()?;
+    let zero = F::zero();
+    let one = F::one();
+    let two = F::from_u16(2);
+    let kind = config.kind;
+    let gain = if kind.has_p() { config.k } else { one };
+    let kp = if kind.has_p() { config.k.abs() } else { zero };
+    let corners = [(lo, lo), (lo, hi), (hi, lo), (hi, hi)];
+    let widest =
+        |f: &dyn Fn(F, F) -> F| corners.iter().fold(zero, |m, &(r, y)| m.max(f(r, y).abs()));
+    let m = lo.abs().max(hi.abs());
+    let span = hi - lo;
+    // P = K·(b·r − y), and its factor b·r.
+    let p_in = widest(&|r, y| config.b * r - y).max(config.b.abs() * m);
+    let p = kp * p_in;
+    // D: ad·D − bd·((y − c·r) − (y_old − c·r_old)), D within the derivative bound.
+    let yd_hi = corners
+        .iter()
+        .fold(F::neg_infinity(), |a, &(r, y)| a.max(y - config.c * r));
+    let yd_lo = corners
+        .iter()
+        .fold(F::infinity(), |a, &(r, y)| a.min(y - config.c * r));
+    let yd = yd_hi.abs().max(yd_lo.abs()).max(config.c.abs() * m);
+    let scale = config.ymin.abs().max(config.ymax.abs());
+    let bound = F::from_u16(STATE_BOUND) * (config.ymax - config.ymin).max(scale);
+    let dn = config.td + config.n * config.h;
+    let (ad, bd) = if kind.has_d() && config.td != zero {
+        (config.td / dn, (gain * config.td * config.n / dn).abs())
+    } else {
+        (zero, zero)
+    };
+    let d_step = bd * (yd_hi - yd_lo);
+    let d = ad * bound + d_step;
+    // I: within i_half of its centre K·(1 − b)·r + (ymin + ymax)/2.
+    let offset = if kind.has_i() {
+        (kp * (one - config.b)).abs() * m
+    } else {
+        zero
+    };
+    let centre = offset + ((config.ymin + config.ymax) / two).abs();
+    let i = centre + (config.ymax - config.ymin) / two + bound;
+    let v = p + i + d;
+    let (bi, ao) = if kind.has_i() {
+        (
+            (gain * config.h / config.ti).abs(),
+            config.h / config.tt.unwrap_or(config.h),
+        )
+    } else {
+        (zero, zero)
+    };
+    let integral_step = bi * span;
+    let tracking = ao * (scale + v);
+    let new_i = i + integral_step + tracking;
+    let limit = T::MAX.to_real::<F>() * (one - F::from_f32_exact(REACH_MARGIN));
+    let terms = [
+        (p, Parameter::K, config.k, "K·(b·r − y)"),
+        (offset, Parameter::B, config.b, "K·(1 − b)·r"),
+        (yd, Parameter::C, config.c, "y − c·r"),
+        (d, Parameter::Td, config.td, "the derivative term"),
+        (v, Parameter::K, config.k, "P + I + D"),
+        (integral_step, Parameter::Ti, config.ti, "K·h/Ti·(r − y)"),
+        (
+            tracking,
+            Parameter::Tt,
+            config.tt.unwrap_or(config.h),
+            "h/Tt·(u − v)",
+        ),
+        (
+            new_i + centre,
+            Parameter::K,
+            config.k,
+            "the integral's update",
+        ),
+    ];
+    for (reach, parameter, value, term) in terms {
+        // A NaN bound is refused too (an infinite one is above the limit).
+        if reach.is_nan() || reach > limit {
+            return Err(ConfigError::OutOfReach {
+                parameter,
+                value,
+                term,
+                reach,
+            });
+        }
+    }
+    Ok(())
+}
+
 impl<T: Scalar> Pid<T> {
     /// A controller for `config` (in `f64` or `f32`), or the error naming its bad parameter.
     ///
@@ -426,6 +537,15 @@ impl<T: Scalar> Pid<T> {
         self.offset_slope.mul(r).add(self.i_mid).sub(feedforward)
     }
 
+    /// [`integral_centre`](Pid::integral_centre), noting a fixed-point saturation.
+    #[inline(always)]
+    fn integral_centre_noting(&self, r: T, feedforward: T, saturated: &mut bool) -> T {
+        self.offset_slope
+            .mul_noting(r, saturated)
+            .add_noting(self.i_mid, saturated)
+            .sub_noting(feedforward, saturated)
+    }
+
     /// One sample. The common case — automatic, running, the integral inside its bounds —
     /// runs here, inlined into the caller; everything else (the first sample, manual mode, an
     /// integral at its bound, a fault) goes to [`step_general`](Pid::step_general), which
@@ -444,7 +564,7 @@ impl<T: Scalar> Pid<T> {
             // so a finite I means finite inputs, v and bounds.
             let centre =
                 self.integral_centre(r, self.bounds_feedforward::<FEEDFORWARD>(feedforward));
-            if centre.sub(s.i).magnitude_within(self.i_half) {
+            if !s.saturated && centre.sub(s.i).magnitude_within(self.i_half) {
                 return self.commit(s, r, track);
             }
         }
@@ -478,7 +598,7 @@ impl<T: Scalar> Pid<T> {
         );
         // A finite I implies finite inputs and v (see `step`; in manual I = u − P − D); the
         // bounds themselves may overflow when an absurd set-point moves them.
-        if !T::both_finite(s.i, bounded) {
+        if s.saturated || !T::both_finite(s.i, bounded) {
             self.fault(r, y);
             return self.u_old;
         }
@@ -499,12 +619,22 @@ impl<T: Scalar> Pid<T> {
         yd_old: T,
         manual: bool,
     ) -> Sample<T> {
-        let p = self.kp.mul(self.b.mul(r).sub(y));
-        let yd = y.sub(self.c.mul(r));
+        // Every product and sum of values below notes a fixed-point saturation (floats never
+        // do: their overflow is an infinity, caught by the finiteness check); the bounds'
+        // own arithmetic (u_old ± dymax with dymax = MAX when there is no rate limit, ±d_bound)
+        // saturates by design and is not noted.
+        let mut o = false;
+        let p = self
+            .kp
+            .mul_noting(self.b.mul_noting(r, &mut o).sub_noting(y, &mut o), &mut o);
+        let yd = y.sub_noting(self.c.mul_noting(r, &mut o), &mut o);
         let d = self
             .ad
-            .mul(self.d)
-            .sub(self.bd.mul(yd.sub(yd_old)))
+            .mul_noting(self.d, &mut o)
+            .sub_noting(
+                self.bd.mul_noting(yd.sub_noting(yd_old, &mut o), &mut o),
+                &mut o,
+            )
             .flush_tiny()
             .clamp_within(T::ZERO.sub(self.d_bound), self.d_bound);
         if manual {
@@ -513,24 +643,39 @@ impl<T: Scalar> Pid<T> {
                 yd,
                 d,
                 u,
-                i: u.sub(p).sub(d),
+                i: u.sub_noting(p, &mut o).sub_noting(d, &mut o),
+                saturated: o,
             };
         }
-        let mut v = p.add(self.i).add(d);
+        let mut v = p.add_noting(self.i, &mut o).add_noting(d, &mut o);
         if FEEDFORWARD {
-            v = v.add(feedforward);
+            v = v.add_noting(feedforward, &mut o);
         }
         let u = v
             .clamp_within(self.u_old.sub(self.dymax), self.u_old.add(self.dymax))
             .clamp_within(self.ymin, self.ymax);
         let applied = track.unwrap_or(u);
         // I + (integral step + tracking), summed in the reference's order.
-        let step = self.bi.mul(r.sub(y)).add(self.ao.mul(applied.sub(v)));
+        let step = self
+            .bi
+            .mul_noting(r.sub_noting(y, &mut o), &mut o)
+            .add_noting(
+                self.ao.mul_noting(applied.sub_noting(v, &mut o), &mut o),
+                &mut o,
+            );
+        let i = self.i.add_noting(step, &mut o);
+        // The centre of the integral's bounds, noted too (the caller recomputes it).
+        let _ = self.integral_centre_noting(
+            r,
+            self.bounds_feedforward::<FEEDFORWARD>(feedforward),
+            &mut o,
+        );
         Sample {
             yd,
             d,
             u,
-            i: self.i.add(step),
+            i,
+            saturated: o,
         }
     }
 
@@ -995,8 +1140,8 @@ mod tests {
             assert!((ua - uc).abs() < 0.05, "{k}: {ua} {uc}");
             y += 0.5 * (0.8 * ua - y) * 0.5;
         }
-        // A gain I16F16 cannot hold is refused, naming the parameter; one it can hold
-        // saturates instead of overflowing with absurd inputs.
+        // A gain I16F16 cannot hold is refused, naming the parameter; with one it can hold,
+        // absurd inputs saturate a product: the output is held and the overflow fault raised.
         let too_big = Config {
             k: 30000.0,
             ..config
@@ -1009,10 +1154,14 @@ mod tests {
             })
         ));
         let mut s = Pid::<I16F16>::new(&Config { td: 0.0, ..too_big }).unwrap();
+        assert_eq!(s.update(I16F16::MAX, I16F16::MIN), I16F16::ZERO, "held");
+        assert!(s.faults().overflow());
+        s.clear_faults();
         assert_eq!(
-            s.update(I16F16::MAX, I16F16::MIN),
+            s.update(I16F16::ZERO, I16F16::from_num(-0.5)),
             I16F16::from_num(1.0),
             "rate-limited from 0"
         );
+        assert!(!s.faults().any());
     }
 }

@@ -10,7 +10,7 @@ use core::fmt;
 
 use crate::alarm::{Alarm, AlarmState};
 use crate::config::{Config, ConfigError, Kind, Parameter};
-use crate::controller::{Inputs, Pid};
+use crate::controller::{Inputs, Pid, check_reach};
 use crate::real::Real;
 use crate::scalar::Scalar;
 use crate::scaling::Scaling;
@@ -802,6 +802,18 @@ impl<T: Scalar, F: Real> Station<T, F> {
     /// every set-point the station can be given is held), and the 4096 A/D counts, converted
     /// to `T`, strictly increasing (no two counts merge). The second check converts every
     /// count once, at start-up only.
+    ///
+    /// The configuration must also be within reach ([`ConfigError::OutOfReach`], checked here
+    /// and at every commit, where a refusal keeps the old set active): for a set-point r and a
+    /// measurement y anywhere on the scale, none of these bounds may exceed L = `T::MAX`·(1 −
+    /// 2⁻⁸) (32 640 for `I16F16`): |K|·|b·r − y|; |K·(1 − b)|·|r| (kinds with I); |y − c·r|;
+    /// the derivative term (ad·[`STATE_BOUND`](crate::STATE_BOUND)·S plus bd times the range
+    /// of y − c·r); v = P + I + D with I at its bound; |K|·h/Ti·span; h/Tt·(S + v); and the
+    /// integral's update with its centre — where S = max(ymax − ymin, |ymin|, |ymax|) and each
+    /// bound takes r and y at the scale's corners independently. It is conservative (the worst
+    /// case over the whole scale, states at their bounds), so some configurations that would
+    /// never saturate are refused; for `f32` and `f64` L is about 3.4·10³⁸ and 1.8·10³⁰⁸. The
+    /// crate README gives the closed form for a PI on a scale 0..M and worked examples.
     pub fn new(
         params: Parameters<F>,
         scaling: Scaling<F>,
@@ -810,6 +822,8 @@ impl<T: Scalar, F: Real> Station<T, F> {
         let staged = Staged::new(params, scaling, limits)?;
         check_scale::<T, F>(scaling)?;
         let pid = Pid::<T>::new(&params.config).map_err(EditError::Config)?;
+        check_reach::<T, F>(&params.config, scaling.min(), scaling.max())
+            .map_err(EditError::Config)?;
         let y = pid.output().to_real();
         Ok(Station {
             pid,
@@ -875,7 +889,9 @@ impl<T: Scalar, F: Real> Station<T, F> {
         // The active set is copied only when a commit may have to be refused.
         let previous = self.staged.active;
         if let Some(p) = self.staged.take_commit() {
-            match self.pid.set_config(&p.config) {
+            let scaling = self.staged.scaling;
+            let fits = check_reach::<T, F>(&p.config, scaling.min(), scaling.max());
+            match fits.and_then(|()| self.pid.set_config(&p.config)) {
                 Ok(()) => {
                     self.commits = self.commits.saturating_add(1);
                     self.refused = None;

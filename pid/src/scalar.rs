@@ -51,6 +51,29 @@ pub trait Scalar: Copy + PartialOrd + core::fmt::Debug {
     /// `self × rhs` (saturating and rounded to nearest for fixed point).
     #[must_use]
     fn mul(self, rhs: Self) -> Self;
+    /// [`add`](Scalar::add), setting `*saturated` when a fixed-point sum saturated (floats
+    /// never set it: their overflow is an infinity, which the controller's finiteness check
+    /// sees).
+    #[inline(always)]
+    #[must_use]
+    fn add_noting(self, rhs: Self, saturated: &mut bool) -> Self {
+        let _ = saturated;
+        self.add(rhs)
+    }
+    /// [`sub`](Scalar::sub), noting saturation as [`add_noting`](Scalar::add_noting).
+    #[inline(always)]
+    #[must_use]
+    fn sub_noting(self, rhs: Self, saturated: &mut bool) -> Self {
+        let _ = saturated;
+        self.sub(rhs)
+    }
+    /// [`mul`](Scalar::mul), noting saturation as [`add_noting`](Scalar::add_noting).
+    #[inline(always)]
+    #[must_use]
+    fn mul_noting(self, rhs: Self, saturated: &mut bool) -> Self {
+        let _ = saturated;
+        self.mul(rhs)
+    }
     /// Whether the value is a finite number (always true for fixed point).
     fn is_finite(self) -> bool;
     /// Whether both values are finite (one test where the type allows it).
@@ -220,6 +243,44 @@ macro_rules! fixed_scalar {
                     narrow
                 };
                 Self::from_bits(clamped)
+            }
+            #[inline(always)]
+            fn add_noting(self, rhs: Self, saturated: &mut bool) -> Self {
+                let (sum, wrapped) = self.overflowing_add(rhs);
+                *saturated |= wrapped;
+                if wrapped {
+                    self.saturating_add(rhs)
+                } else {
+                    sum
+                }
+            }
+            #[inline(always)]
+            fn sub_noting(self, rhs: Self, saturated: &mut bool) -> Self {
+                let (difference, wrapped) = self.overflowing_sub(rhs);
+                *saturated |= wrapped;
+                if wrapped {
+                    self.saturating_sub(rhs)
+                } else {
+                    difference
+                }
+            }
+            #[inline(always)]
+            fn mul_noting(self, rhs: Self, saturated: &mut bool) -> Self {
+                let product = Scalar::mul(self, rhs);
+                // The rounded product saturated exactly when it lies at an end of the range
+                // and the exact one is beyond it: recomputed in the double width.
+                if product == Self::MAX || product == Self::MIN {
+                    let wide =
+                        <$wide>::from(self.to_bits()).wrapping_mul(<$wide>::from(rhs.to_bits()));
+                    let half = match Frac::U32 {
+                        0 => 0,
+                        frac => <$wide>::from(1u8).wrapping_shl(frac.wrapping_sub(1)),
+                    };
+                    let shifted = wide.wrapping_add(half) >> Frac::U32;
+                    *saturated |= shifted > <$wide>::from(<$bits>::MAX)
+                        || shifted < <$wide>::from(<$bits>::MIN);
+                }
+                product
             }
             #[inline(always)]
             fn is_finite(self) -> bool {

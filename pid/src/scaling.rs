@@ -44,6 +44,14 @@ pub enum ScalingError<F = f64> {
         /// SCALEMAX.
         max: F,
     },
+    /// SCALEMIN, SCALEMAX (other than 0) or the span SCALEMAX − SCALEMIN is subnormal: the
+    /// error bound of [`Scaling::count_to_units`] does not hold there.
+    Subnormal {
+        /// SCALEMIN.
+        min: F,
+        /// SCALEMAX.
+        max: F,
+    },
 }
 
 impl<F: Real> fmt::Display for ScalingError<F> {
@@ -67,6 +75,10 @@ impl<F: Real> fmt::Display for ScalingError<F> {
                 f,
                 "SCALEMAX - SCALEMIN times {ADC_FULL_SCALE} must be finite, got SCALEMIN {min}, SCALEMAX {max}"
             ),
+            ScalingError::Subnormal { min, max } => write!(
+                f,
+                "SCALEMIN, SCALEMAX and SCALEMAX - SCALEMIN must be 0 or normal numbers (not subnormal), got SCALEMIN {min}, SCALEMAX {max}"
+            ),
         }
     }
 }
@@ -78,7 +90,7 @@ impl<F: Real> core::error::Error for ScalingError<F> {}
 ///
 /// Rounding: A/D counts map linearly to engineering units, SCALEMIN + (SCALEMAX − SCALEMIN) ·
 /// count / 4095 computed in the scale's type: count 0 is SCALEMIN and count 4095 is SCALEMAX
-/// exactly, every count lands within SCALEMIN..=SCALEMAX, a higher count never gives a lower
+/// exactly (bit for bit, −0.0 included), every count lands within SCALEMIN..=SCALEMAX, a higher count never gives a lower
 /// value, and each value is within 2ε·(SCALEMAX − SCALEMIN) + ε·max(|SCALEMIN|, |SCALEMAX|) of
 /// the exact one (ε = the type's `EPSILON`: 2⁻⁵² for `f64`, 2⁻²³ for `f32`). Volts map to the nearest D/A count, halves rounded up, clamped to 0–255.
 /// Deserializing goes through [`Scaling::new`], so stored data with SCALEMAX ≤ SCALEMIN is an
@@ -129,7 +141,8 @@ impl<F: Real> TryFrom<RawScaling<F>> for Scaling<F> {
 
 impl<F: Real> Scaling<F> {
     /// The scale SCALEMIN..SCALEMAX. Refused: an end that is not finite, SCALEMAX ≤ SCALEMIN,
-    /// and a span (SCALEMAX − SCALEMIN) whose product with 4095 is not finite.
+    /// a span (SCALEMAX − SCALEMIN) whose product with 4095 is not finite, and a subnormal end
+    /// or span ([`ScalingError::Subnormal`]; an end may be 0 or −0).
     pub fn new(scale_min: F, scale_max: F) -> Result<Scaling<F>, ScalingError<F>> {
         if !(scale_min.is_finite() && scale_max.is_finite()) {
             return Err(ScalingError::NotFinite);
@@ -143,6 +156,14 @@ impl<F: Real> Scaling<F> {
         // The span times the full-scale count must be finite too, or a conversion overflows.
         if !((scale_max - scale_min) * F::from_u16(ADC_FULL_SCALE)).is_finite() {
             return Err(ScalingError::SpanTooLarge {
+                min: scale_min,
+                max: scale_max,
+            });
+        }
+        let zero = F::zero();
+        let subnormal = |x: F| x != zero && !x.is_normal();
+        if subnormal(scale_min) || subnormal(scale_max) || subnormal(scale_max - scale_min) {
+            return Err(ScalingError::Subnormal {
                 min: scale_min,
                 max: scale_max,
             });
@@ -172,6 +193,10 @@ impl<F: Real> Scaling<F> {
         }
         if count == ADC_FULL_SCALE {
             return Ok(self.max);
+        }
+        if count == 0 {
+            // SCALEMIN bit for bit (min + 0 would turn −0.0 into +0.0).
+            return Ok(self.min);
         }
         // Each step rounds monotonically, so the result never decreases with the count; the
         // clamp keeps rounding from leaving the scale and keeps the order.

@@ -110,10 +110,13 @@ fn a_commit_puts_into_force_the_set_as_it_was_when_committed() {
     assert!(checked > 90_000);
 }
 
+/// A P controller whose gain (1/64) keeps every term within I16F16 on any scale the type
+/// holds, so that the scale checks alone decide.
 fn p_params<F: regler_pid::Real>(setpoint: F, rfel: F) -> Parameters<F> {
     Parameters {
         config: Config {
             kind: Kind::P,
+            k: F::one() / F::from_u16(64),
             ..Config::default()
         },
         setpoint,
@@ -451,5 +454,77 @@ fn a_noisy_error_near_rfel_is_one_alarm() {
             );
             assert_eq!(st.alarm().raised(), raised);
         }
+    }
+}
+
+mod noise_band {
+    use super::{Kind, OperatorLimits, Scaling, Station, with};
+    use proptest::prelude::*;
+
+    /// Runs 200 samples of the error RFEL + noise (noise ∈ ±amplitude, from `signs`),
+    /// acknowledging every `ack_every` samples; returns (alarms raised, buzzer heard after the
+    /// first acknowledge).
+    fn run(
+        min: f64,
+        span: f64,
+        rfel: f64,
+        amplitude: f64,
+        signs: &[bool],
+        ack_every: usize,
+    ) -> (u32, bool) {
+        let scaling = Scaling::new(min, min + span).unwrap();
+        let mut p = with(Kind::PI, 4.0, 0.0);
+        p.setpoint = min + span / 2.0;
+        p.rfel = rfel;
+        let mut st = Station::<f64>::new(p, scaling, OperatorLimits::default()).unwrap();
+        let mut buzzed = false;
+        for (k, &up) in signs.iter().cycle().take(200).enumerate() {
+            let e = if up {
+                rfel + amplitude
+            } else {
+                rfel - amplitude
+            };
+            st.sample(p.setpoint - e);
+            if k >= 1 && st.alarm().buzzer() {
+                buzzed = true;
+            }
+            if k % ack_every == 0 {
+                st.acknowledge();
+            }
+        }
+        (st.alarm().raised(), buzzed)
+    }
+
+    proptest! {
+        /// README: an error that stays within the band around RFEL (RFEL ± noise, noise below
+        /// band = min(1 % of span, RFEL/2), the first sample above RFEL) is one alarm, and the
+        /// buzzer is silent after the first acknowledge.
+        #[test]
+        fn noise_smaller_than_the_band_is_one_alarm(
+            min in -1000.0f64..1000.0,
+            span in 1.0f64..10_000.0,
+            rfel_frac in 0.001f64..0.4,
+            noise_frac in 0.01f64..0.99,
+            signs in proptest::collection::vec(any::<bool>(), 1..20),
+            ack_every in 1usize..5,
+        ) {
+            let rfel = rfel_frac * span;
+            let band = f64::min(span / 100.0, rfel / 2.0);
+            let mut signs = signs;
+            signs[0] = true;
+            let (raised, buzzed) = run(min, span, rfel, noise_frac * band, &signs, ack_every);
+            prop_assert_eq!(raised, 1);
+            prop_assert!(!buzzed);
+        }
+    }
+
+    /// README: noise larger than the band may raise more than one alarm: RFEL ± 1.5·band
+    /// alternating raises one at every excursion above RFEL.
+    #[test]
+    fn noise_larger_than_the_band_may_raise_more() {
+        let (span, rfel) = (100.0, 5.0);
+        let band = f64::min(span / 100.0, rfel / 2.0);
+        let (raised, _) = run(0.0, span, rfel, 1.5 * band, &[true, false], 1);
+        assert_eq!(raised, 100);
     }
 }

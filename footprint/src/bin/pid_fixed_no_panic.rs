@@ -71,8 +71,19 @@ fn main() -> ! {
         let u = pid.update(I16F16::from_real(5.0f32), I16F16::from_real(y));
         unsafe { write_volatile(&raw mut OUTPUT, u.to_bits()) };
         let keyed = unsafe { read_volatile(addr_of!(KEYED)) };
-        if keyed != 0.0 && station.staged_mut().edit(Code::Kp, keyed).is_ok() {
-            station.staged_mut().commit();
+        if keyed != 0.0 {
+            match station.staged_mut().edit(Code::Kp, keyed) {
+                Ok(_) => station.staged_mut().commit(),
+                // The panic-free route to the operator's text (not `{}`).
+                Err(e) => {
+                    let m = e.display_message();
+                    unsafe { write_volatile(&raw mut VOLTS, m.len() as f32) };
+                    station.staged_mut().discard();
+                }
+            }
+        }
+        if y > 9.0 {
+            station.acknowledge();
         }
         let v = station.sample(y);
         unsafe { write_volatile(&raw mut VOLTS, v) };
