@@ -812,8 +812,11 @@ impl<T: Scalar, F: Real> Station<T, F> {
     /// integral's update with its centre — where S = max(ymax − ymin, |ymin|, |ymax|) and each
     /// bound takes r and y at the scale's corners independently. It is conservative (the worst
     /// case over the whole scale, states at their bounds), so some configurations that would
-    /// never saturate are refused; for `f32` and `f64` L is about 3.4·10³⁸ and 1.8·10³⁰⁸. The
-    /// crate README gives the closed form for a PI on a scale 0..M and worked examples.
+    /// never saturate are refused. It applies to saturating types only ([`Scalar::SATURATES`]):
+    /// in `f32` and `f64` an overflow is an infinity, which the update catches (output held,
+    /// [`Faults::overflow`](crate::Faults::overflow)), so float stations skip it and link none
+    /// of it. The crate README gives the closed form for a PI on a scale 0..M and worked
+    /// examples.
     pub fn new(
         params: Parameters<F>,
         scaling: Scaling<F>,
@@ -822,8 +825,10 @@ impl<T: Scalar, F: Real> Station<T, F> {
         let staged = Staged::new(params, scaling, limits)?;
         check_scale::<T, F>(scaling)?;
         let pid = Pid::<T>::new(&params.config).map_err(EditError::Config)?;
-        check_reach::<T, F>(&params.config, scaling.min(), scaling.max())
-            .map_err(EditError::Config)?;
+        if T::SATURATES {
+            check_reach::<T, F>(&params.config, scaling.min(), scaling.max())
+                .map_err(EditError::Config)?;
+        }
         let y = pid.output().to_real();
         Ok(Station {
             pid,
@@ -890,7 +895,11 @@ impl<T: Scalar, F: Real> Station<T, F> {
         let previous = self.staged.active;
         if let Some(p) = self.staged.take_commit() {
             let scaling = self.staged.scaling;
-            let fits = check_reach::<T, F>(&p.config, scaling.min(), scaling.max());
+            let fits = if T::SATURATES {
+                check_reach::<T, F>(&p.config, scaling.min(), scaling.max())
+            } else {
+                Ok(())
+            };
             match fits.and_then(|()| self.pid.set_config(&p.config)) {
                 Ok(()) => {
                     self.commits = self.commits.saturating_add(1);

@@ -19,6 +19,11 @@ pub trait Scalar: Copy + PartialOrd + core::fmt::Debug {
     const ZERO: Self;
     /// The largest value.
     const MAX: Self;
+    /// Whether arithmetic saturates silently at the type's ends (fixed point), rather than
+    /// overflowing to an infinity that the update's finiteness check catches (floats). A
+    /// [`Station`](crate::Station) checks the reach of a configuration only for saturating
+    /// types. `true` unless a type says otherwise, so a new type is checked.
+    const SATURATES: bool = true;
     /// The nearest value to `v`. Floats: a finite `v` beyond the range saturates at `±MAX`; NaN
     /// and infinities stay NaN and infinities, so a broken reading still reaches the controller's
     /// fault check. Fixed point: the nearest value, ties away from zero, saturating at
@@ -161,6 +166,7 @@ macro_rules! float_ops {
 impl Scalar for f32 {
     const ZERO: f32 = 0.0;
     const MAX: f32 = f32::MAX;
+    const SATURATES: bool = false;
     #[inline(always)]
     fn from_real<F: Real>(v: F) -> f32 {
         v.to_f32_nearest()
@@ -175,6 +181,7 @@ impl Scalar for f32 {
 impl Scalar for f64 {
     const ZERO: f64 = 0.0;
     const MAX: f64 = f64::MAX;
+    const SATURATES: bool = false;
     #[inline(always)]
     fn from_real<F: Real>(v: F) -> f64 {
         v.to_f64_exact()

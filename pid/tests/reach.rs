@@ -24,8 +24,10 @@ fn params(config: Config<f64>, setpoint: f64) -> Parameters<f64> {
 }
 
 fn limits() -> OperatorLimits<f64> {
+    // Gains up to 10⁹: the reach check, not the operator's KP limit, decides here.
     OperatorLimits {
         output: (0.0, 1000.0),
+        kp: (-1.0, 1e9),
         ..OperatorLimits::default()
     }
 }
@@ -123,7 +125,7 @@ proptest! {
             action: config.action,
         };
         let pf = Parameters { config: cf, setpoint: (m / 2.0) as f32, rfel: 1.0, night_setback: 0.0 };
-        let lf = OperatorLimits { output: (0.0, 1000.0), ..OperatorLimits::default() };
+        let lf = OperatorLimits { output: (0.0, 1000.0), kp: (-1.0, 1e9), ..OperatorLimits::default() };
         prop_assert!(Station::<f32, f32>::new(pf, Scaling::new(0.0, m as f32).unwrap(), lf).is_ok());
     }
 }
@@ -205,7 +207,7 @@ fn the_check_is_conservative() {
 /// README: a float station refuses only a configuration whose terms pass ~3.4e38 (`f32`):
 /// K = 1e35 on 0..10 000.
 #[test]
-fn a_float_station_refuses_only_beyond_the_float_range() {
+fn a_float_station_skips_the_check_and_an_overflow_holds_the_output() {
     let config = Config {
         kind: Kind::PI,
         k: 1e35f32,
@@ -224,13 +226,25 @@ fn a_float_station_refuses_only_beyond_the_float_range() {
         night_setback: 0.0,
     };
     let sc = Scaling::new(0.0f32, 10_000.0).unwrap();
-    assert!(matches!(
-        Station::<f32, f32>::new(p, sc, limits),
-        Err(EditError::Config(ConfigError::OutOfReach { .. }))
-    ));
-    let p = Parameters {
-        config: Config { k: 1e33, ..config },
+    // Accepted: in f32 the products become infinite rather than saturate ...
+    let mut station = Station::<f32, f32>::new(p, sc, limits).unwrap();
+    let before = station.sample(5000.0);
+    assert!(!station.pid().faults().overflow());
+    // ... and the update catches the infinity: K·e = 1e35 · 5000 is beyond f32.
+    let held = station.sample(0.0);
+    assert!(
+        station.pid().faults().overflow(),
+        "{:?}",
+        station.pid().faults()
+    );
+    assert_eq!(held.to_bits(), before.to_bits(), "the output is held");
+    // A gain within I16F16 whose products leave it over this scale is refused before it runs.
+    let fits = Parameters {
+        config: Config { k: 100.0, ..config },
         ..p
     };
-    assert!(Station::<f32, f32>::new(p, sc, limits).is_ok());
+    assert!(matches!(
+        Station::<I16F16, f32>::new(fits, sc, limits),
+        Err(EditError::Config(ConfigError::OutOfReach { .. }))
+    ));
 }
