@@ -999,3 +999,39 @@ fn small_recalibrations_up_and_down_full_chain() {
         }
     }
 }
+
+/// `start_up` keeps every trolley of a snapshot it restores (and the tracker then equals the
+/// one that took it), and empties a tracker whose snapshot it refuses, whatever that tracker
+/// held before (cargo-mutants: clearing a restored tracker, or not clearing a refused one, was
+/// not noticed).
+#[test]
+fn start_up_keeps_a_restored_tracker_and_empties_a_refused_one() {
+    let sia = 3000;
+    let cfg = StretchConfig::new(sia);
+    let build = || -> Tracker<u16, 8, 2> {
+        Tracker::new(DistanceTable::new(sia, &[1000, 2000]).unwrap(), 6).unwrap()
+    };
+    let mut running = build();
+    for (trolley, tipper) in [(7u16, 0usize), (8, 1), (9, 1)] {
+        running.enter(trolley, tipper).unwrap();
+        for _ in 0..40 {
+            running.pulse(|_| {});
+        }
+    }
+    let stored = running.snapshot();
+    let meter = StretchMeter::new(cfg).unwrap();
+    for stored_meter in [Some(meter.clone()), None] {
+        // Restored: the tracker is the one that took the snapshot, trolleys and all.
+        let mut tracker = build();
+        start_up(&mut tracker, Some(&stored), stored_meter.clone(), cfg).unwrap();
+        assert_eq!(tracker.snapshot(), stored);
+        // Refused (torn): the tracker is empty, even one that held trolleys before.
+        let mut torn = stored.clone();
+        torn.dia = 0;
+        let mut tracker = running.clone();
+        start_up(&mut tracker, Some(&torn), stored_meter, cfg).unwrap();
+        let mut empty = build();
+        empty.set_now(tracker.now());
+        assert_eq!(tracker.snapshot(), empty.snapshot());
+    }
+}
