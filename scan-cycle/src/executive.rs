@@ -15,6 +15,17 @@ pub trait Io<const IW: usize, const OW: usize> {
     /// Writes every output word (once, at the end of a cycle, or the safe state).
     fn write_outputs(&mut self, outputs: &[u16; OW]);
     /// Microseconds from a free-running clock (wrapping).
+    ///
+    /// **The clock must count forward**, wrapping at 2³² only. A µs counter built from a
+    /// 16-bit timer and an overflow interrupt must be read race-free — read the overflow count,
+    /// the timer, and the overflow count again, and retry if it changed (or take the overflow
+    /// count together with the timer's pending-overflow flag) — or a reading taken just as the
+    /// timer overflows is one overflow (65 536 µs) behind. The executive survives a clock that
+    /// steps back ([`Executive::now_ms`] never goes back, and a single step back adds it no
+    /// time), but it cannot tell a glitch from a new base: the watchdogs and [`CycleStats`] take
+    /// each reading as given (a reading behind can trip a watchdog early — towards the safe
+    /// outputs — or count a false overrun), and glitches read twice running make `now_ms` gain
+    /// their size each time, so the IEC timers run early.
     fn now_us(&mut self) -> u32;
     /// Pulses a hardware watchdog, if the plant has one (the source pulsed it every 50 ms).
     fn kick_watchdog(&mut self) {}
@@ -554,10 +565,11 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
         // What a halted cycle puts back: the input images as before it.
         let (raw_before, inputs_before) = (self.raw, self.inputs);
         let start = io.now_us();
-        if let Some(interval) = self.last_start_us.and_then(|last| forward_us(last, start)) {
-            let jitter = interval.abs_diff(self.config.period_us);
-            self.stats.jitter_us = self.stats.jitter_us.max(jitter);
-        }
+        // The jitter counts only if the cycle is (a halted cycle leaves the statistics alone).
+        let jitter = self
+            .last_start_us
+            .and_then(|last| forward_us(last, start))
+            .map(|interval| interval.abs_diff(self.config.period_us));
         self.last_start_us = Some(start);
         // Level A: all inputs in.
         io.read_inputs(&mut self.raw);
@@ -589,7 +601,7 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
                 match signals.confirm(begin.events, end) {
                     Ok(()) => {
                         self.watch_events = begin.events;
-                        self.finish(io, cycle, start, end);
+                        self.finish(io, cycle, start, end, jitter);
                         None
                     }
                     Err(halt) => {
@@ -615,8 +627,18 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
     }
 
     /// The end of a cycle that ran to its confirmed write: kick, count, swap, statistics.
-    fn finish<I: Io<IW, OW>>(&mut self, io: &mut I, cycle: u64, start: u32, end: u32) {
+    fn finish<I: Io<IW, OW>>(
+        &mut self,
+        io: &mut I,
+        cycle: u64,
+        start: u32,
+        end: u32,
+        jitter: Option<u32>,
+    ) {
         io.kick_watchdog();
+        if let Some(jitter) = jitter {
+            self.stats.jitter_us = self.stats.jitter_us.max(jitter);
+        }
         self.cycle = cycle;
         self.previous = self.next;
         self.last_end_us = Some(end);
@@ -689,7 +711,8 @@ impl<const IW: usize, const OW: usize> Executive<IW, OW> {
     /// stands still for one cycle at most, the one that first read the new base (that
     /// interval is lost); a glitch read once costs nothing, and one read twice running, d
     /// behind the reference both times, gains d less the interval from the reference to the
-    /// first glitch reading. A gap between two cycles counts only if it is under 2³¹ µs: a
+    /// first glitch reading (such pairs add up: [`Io::now_us`] must count forward). A gap
+    /// between two cycles counts only if it is under 2³¹ µs: a
     /// `u32` µs clock cannot tell a longer one from a shorter one. Halts do not count: after a
     /// power failure or a watchdog trip (of the executive or of [`Signals`]) the clock goes on
     /// from where it stood at the last cycle's start, however long the halt lasted — timers
