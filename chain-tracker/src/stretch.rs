@@ -277,7 +277,10 @@ impl StretchMeter {
     }
 
     /// Makes the meter agree with the distance table after a restart: takes the table's DIA
-    /// (`tracker.table().dia()`) as the accepted one and forgets a half-confirmed candidate.
+    /// (`tracker.table().dia()`) as the accepted one and, if that changes the meter's DIA,
+    /// forgets a half-confirmed candidate. When meter and table already agree (both stored
+    /// and current), nothing changes: a candidate half-confirmed before the power failure
+    /// goes on counting, so a chain moving on is followed as if power had not failed.
     /// Only for a table restored from its snapshot: after a refused snapshot the table is at
     /// SIA and the meter's DIA is the one to keep — [`start_up`](crate::start_up) does the
     /// right thing for each case.
@@ -295,8 +298,10 @@ impl StretchMeter {
             return Err(StretchConfigError::ZeroMeasurement);
         }
         let changed = table_dia != self.accepted;
-        self.accepted = table_dia;
-        self.candidate = None;
+        if changed {
+            self.accepted = table_dia;
+            self.candidate = None;
+        }
         Ok(changed)
     }
 
@@ -429,8 +434,13 @@ mod tests {
         let mut m = StretchMeter::new(StretchConfig::new(3000)).unwrap();
         assert_eq!(m.measure(2990), Measurement::Pending { dia: 2990 });
         assert_eq!(m.reconcile(3000), Ok(false));
-        // The half-confirmed candidate was forgotten.
-        assert_eq!(m.measure(2990), Measurement::Pending { dia: 2990 });
+        // Meter and table agreed: the half-confirmed candidate goes on counting.
+        assert_eq!(m.measure(2990), Measurement::Accepted { dia: 2990 });
+        assert_eq!(m.measure(2980), Measurement::Pending { dia: 2980 });
+        // A table at another DIA: taken, and the candidate forgotten.
+        assert_eq!(m.reconcile(2995), Ok(true));
+        assert_eq!(m.dia(), 2995);
+        assert_eq!(m.measure(2980), Measurement::Pending { dia: 2980 });
         assert_eq!(m.reconcile(2990), Ok(true));
         assert_eq!(m.dia(), 2990);
         assert_eq!(m.reconcile(0), Err(StretchConfigError::ZeroMeasurement));
