@@ -2,8 +2,8 @@
 
 use regler_scan_cycle::{
     Breakpoint, Conditioning, Ctd, Ctu, Ctud, CycleConfig, DateTime, Executive, FTrig, Halt, Io,
-    MinuteTable, RTrig, Restart, Rs, Signals, Spool, Sr, Start, StepChain, TimerQueue, Tof, Ton, Tp,
-    Weekdays,
+    MinuteTable, RTrig, Restart, Rs, Signals, Spool, Sr, Start, StepChain, TimerQueue, Tof, Ton,
+    Tp, Weekdays,
 };
 
 use crate::{Outcome, check};
@@ -167,18 +167,21 @@ pub fn signals_trip_inside_a_cycle() -> Outcome {
     check!(SIGNALS.tripped());
     SIGNALS.reset_watchdog();
     let mut previous_safe = false;
-    check!(plc
-        .cycle_with(&mut plant, &SIGNALS, |s| previous_safe = s.previous.words() == &[0])
-        .is_ok());
+    check!(
+        plc.cycle_with(&mut plant, &SIGNALS, |s| previous_safe =
+            s.previous.words() == &[0])
+            .is_ok()
+    );
     check!(previous_safe);
     // The power fails while the program runs: nothing of this cycle reaches the outputs (the
     // interrupt's handler writes the safe ones), and after a restart-inhibited resume the
     // program starts from the safe outputs.
-    check!(plc
-        .cycle_with(&mut plant, &SIGNALS, |s| {
+    check!(
+        plc.cycle_with(&mut plant, &SIGNALS, |s| {
             let _ = s.outputs.set(0, true);
         })
-        .is_ok());
+        .is_ok()
+    );
     check!(plant.outputs == [1]);
     let r = plc.cycle_with(&mut plant, &SIGNALS, |s| {
         SIGNALS.power_fail(); // the power-fail interrupt
@@ -188,9 +191,11 @@ pub fn signals_trip_inside_a_cycle() -> Outcome {
     check!(plant.outputs == [1]); // the cycle wrote nothing
     SIGNALS.resume(Restart::Inhibit);
     previous_safe = false;
-    check!(plc
-        .cycle_with(&mut plant, &SIGNALS, |s| previous_safe = s.previous.words() == &[0])
-        .is_ok());
+    check!(
+        plc.cycle_with(&mut plant, &SIGNALS, |s| previous_safe =
+            s.previous.words() == &[0])
+            .is_ok()
+    );
     check!(previous_safe && plant.outputs == [0]);
     Ok(())
 }
@@ -248,23 +253,25 @@ pub fn step_chain_spool_and_breakpoints() -> Outcome {
     let mut counts = Counts { seen: 0 };
     // The monitor: run until output 2 comes on, then cont to its next rising edge.
     let on = [Breakpoint::OutputOn(2)];
-    let (n1, why) = plc.run(
-        &mut plant,
-        100,
-        &on,
-        |s| chain.run(s, &mut counts),
-        |_, _| {},
-    )
-    .map_err(|_| "breakpoints")?;
+    let (n1, why) = plc
+        .run(
+            &mut plant,
+            100,
+            &on,
+            |s| chain.run(s, &mut counts),
+            |_, _| {},
+        )
+        .map_err(|_| "breakpoints")?;
     check!(why == Some(Halt::Breakpoint(Breakpoint::OutputOn(2))));
-    let (n2, _) = plc.run(
-        &mut plant,
-        100,
-        &on,
-        |s| chain.run(s, &mut counts),
-        |_, _| {},
-    )
-    .map_err(|_| "breakpoints")?;
+    let (n2, _) = plc
+        .run(
+            &mut plant,
+            100,
+            &on,
+            |s| chain.run(s, &mut counts),
+            |_, _| {},
+        )
+        .map_err(|_| "breakpoints")?;
     check!(n1 == 1 && n2 == 9); // on in cycles 1-2 and 10-12: the next edge is cycle 10
     check!(counts.seen == 10);
     // Level C: jobs in the reserve after a cycle; a full spool hands the job back.

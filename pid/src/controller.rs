@@ -426,6 +426,16 @@ pub(crate) fn check_reach<T: Scalar, F: Real>(
     let new_i = i + integral_step + tracking;
     let limit = T::MAX.to_real::<F>() * (one - F::from_f32_exact(REACH_MARGIN));
     let terms = [
+        // The sums the update forms on every sample, for every kind: b·r − y, the change of
+        // y − c·r between samples, and u − v before the tracking gain.
+        (p_in, Parameter::B, config.b, "b·r − y"),
+        (
+            yd_hi - yd_lo,
+            Parameter::C,
+            config.c,
+            "(y − c·r) − (y_old − c·r_old)",
+        ),
+        (scale + v, Parameter::K, config.k, "u − v"),
         (p, Parameter::K, config.k, "K·(b·r − y)"),
         (offset, Parameter::B, config.b, "K·(1 − b)·r"),
         (yd, Parameter::C, config.c, "y − c·r"),

@@ -806,7 +806,10 @@ impl<T: Scalar, F: Real> Station<T, F> {
     /// The configuration must also be within reach ([`ConfigError::OutOfReach`], checked here
     /// and at every commit, where a refusal keeps the old set active): for a set-point r and a
     /// measurement y anywhere on the scale, none of these bounds may exceed L = `T::MAX`·(1 −
-    /// 2⁻⁸) (32 640 for `I16F16`): |K|·|b·r − y|; |K·(1 − b)|·|r| (kinds with I); |y − c·r|;
+    /// 2⁻⁸) (32 640 for `I16F16`): |b·r − y| and the change of y − c·r between two samples
+    /// (summed on every sample, whatever the kind, so a set-point weight b outside 0..1 or a
+    /// c of 1 on a wide scale can be refused with a small gain); |u − v| (S + v);
+    /// |K|·|b·r − y|; |K·(1 − b)|·|r| (kinds with I); |y − c·r|;
     /// the derivative term (ad·[`STATE_BOUND`](crate::STATE_BOUND)·S plus bd times the range
     /// of y − c·r); v = P + I + D with I at its bound; |K|·h/Ti·span; h/Tt·(S + v); and the
     /// integral's update with its centre — where S = max(ymax − ymin, |ymin|, |ymax|) and each

@@ -34,12 +34,12 @@ fn limits() -> OperatorLimits<f64> {
 
 /// The README's closed form for a PI (Td = 0) on a scale 0..M with 0 ≤ b ≤ 1, output limits
 /// 0 ≤ ymin < ymax = Y and a = h/Tt (1 when Tt is unset): the largest of M,
-/// v = K·M·(2 − b) + 101·Y and R = K·M·(2·(1 − b) + a·(2 − b) + h/Ti) + (101.5 + 102·a)·Y +
+/// v = K·M·(2 − b) + 102·Y and R = K·M·(2·(1 − b) + a·(2 − b) + h/Ti) + (101.5 + 102·a)·Y +
 /// ymin/2.
 fn reach(c: &Config<f64>, m: f64) -> f64 {
     let a = c.h / c.tt.unwrap_or(c.h);
     let (k, b, y) = (c.k.abs(), c.b, c.ymax);
-    let v = k * m * (2.0 - b) + 101.0 * y;
+    let v = k * m * (2.0 - b) + 102.0 * y;
     let r = k * m * (2.0 * (1.0 - b) + a * (2.0 - b) + c.h / c.ti)
         + (101.5 + 102.0 * a) * y
         + c.ymin / 2.0;

@@ -18,7 +18,24 @@ use regler_chain_tracker::{
 use regler_footprint::{MEASURING, finish, refused};
 use regler_trolley_id::{AlarmLimits, ReaderHealth, Strategy, Voter};
 
-static INPUT: [u32; 16] = [3000, 1000, 2500, 4000, 6, 2985, 7, 1, 0xFFFF_FFFF, 3, 2, 5, 9, 11, 13, 17];
+static INPUT: [u32; 16] = [
+    3000,
+    1000,
+    2500,
+    4000,
+    6,
+    2985,
+    7,
+    1,
+    0xFFFF_FFFF,
+    3,
+    2,
+    5,
+    9,
+    11,
+    13,
+    17,
+];
 /// Rounds of the loop (bounded, so the measuring build ends under QEMU).
 static ROUNDS: u32 = 1_000;
 static mut OUT: u32 = 0;
@@ -33,20 +50,41 @@ fn inp(i: usize) -> u32 {
 fn main() -> ! {
     let sa = [inp(1), inp(2), inp(3), inp(9), inp(10), inp(11)];
     let n = (inp(13) as usize) % 7;
-    let Ok(table) = DistanceTable::<8>::new(inp(0), black_box(&sa[..n])) else { refused() };
-    let Ok(mut tr) = Tracker::<u16, 64, 8>::new(table, inp(4)) else { refused() };
+    let Ok(table) = DistanceTable::<8>::new(inp(0), black_box(&sa[..n])) else {
+        refused()
+    };
+    let Ok(mut tr) = Tracker::<u16, 64, 8>::new(table, inp(4)) else {
+        refused()
+    };
     let mut tr2 = tr.clone();
     let mut cfg = StretchConfig::new(inp(0));
     cfg.confirmations = inp(7) as u8;
     cfg.plausible_per_mille = inp(12);
     cfg.alarm_per_mille = inp(14);
-    let Ok(meter) = StretchMeter::with_dia(cfg, inp(5)) else { refused() };
-    let limits = AlarmLimits { no_read_per_mille: inp(5), disagreement_per_mille: inp(6), min_passages: inp(7) };
-    let Ok(mut health) = ReaderHealth::<37>::new(limits) else { refused() };
-    let Ok(mut voter) = Voter::new(Strategy::Majority { min_samples: 3 }) else { refused() };
+    let Ok(meter) = StretchMeter::with_dia(cfg, inp(5)) else {
+        refused()
+    };
+    let limits = AlarmLimits {
+        no_read_per_mille: inp(5),
+        disagreement_per_mille: inp(6),
+        min_passages: inp(7),
+    };
+    let Ok(mut health) = ReaderHealth::<37>::new(limits) else {
+        refused()
+    };
+    let Ok(mut voter) = Voter::new(Strategy::Majority { min_samples: 3 }) else {
+        refused()
+    };
     let mut acc = 0u32;
     let mut ev = |e: TipperEvent<u16>| unsafe {
-        let o = read_volatile(&raw const OUT); write_volatile(&raw mut OUT, o.wrapping_add(match e { TipperEvent::Set { tipper, trolley } => tipper as u32 ^ u32::from(trolley), TipperEvent::Reset { tipper } => tipper as u32 }));
+        let o = read_volatile(&raw const OUT);
+        write_volatile(
+            &raw mut OUT,
+            o.wrapping_add(match e {
+                TipperEvent::Set { tipper, trolley } => tipper as u32 ^ u32::from(trolley),
+                TipperEvent::Reset { tipper } => tipper as u32,
+            }),
+        );
     };
     // Start-up from a stored snapshot and meter whose values the compiler cannot see.
     let stored = unsafe { &*addr_of!(SNAP2) };
@@ -60,9 +98,8 @@ fn main() -> ! {
         tr.advance(inp(i + 2), &mut ev);
         let _ = tr.recalibrate(inp(i + 3));
         tr.set_now(inp(i + 4));
-        match meter.measure(inp(i + 5)) {
-            regler_chain_tracker::Measurement::Accepted { dia } => { let _ = tr.recalibrate(dia); }
-            _ => {}
+        if let regler_chain_tracker::Measurement::Accepted { dia } = meter.measure(inp(i + 5)) {
+            let _ = tr.recalibrate(dia);
         }
         meter.start();
         meter.pulse();
@@ -77,14 +114,25 @@ fn main() -> ! {
             s2.dia = inp(i + 8);
             s2.in_flight.clear();
             s2.held.clear();
-            let _ = s2.in_flight.push(InFlight { trolley: inp(i + 9) as u16, tipper: inp(i + 10) as usize, remaining: inp(i + 11) });
-            let _ = s2.held.push(HeldTipper { tipper: inp(i + 12) as usize, remaining: inp(i + 13) });
+            let _ = s2.in_flight.push(InFlight {
+                trolley: inp(i + 9) as u16,
+                tipper: inp(i + 10) as usize,
+                remaining: inp(i + 11),
+            });
+            let _ = s2.held.push(HeldTipper {
+                tipper: inp(i + 12) as usize,
+                remaining: inp(i + 13),
+            });
             let _ = tr2.restore(s2);
         }
         tr2.advance(inp(i + 14), &mut ev);
-        for j in 0..3 { voter.sample(inp(i + j) as u16); }
+        for j in 0..3 {
+            voter.sample(inp(i + j) as u16);
+        }
         let p = voter.finish();
-        if health.record(&p).is_some() { acc ^= 1; }
+        if health.record(&p).is_some() {
+            acc ^= 1;
+        }
     }
     acc ^= tr.len() as u32 ^ tr2.now() ^ meter.dia() ^ health.window().no_reads;
     unsafe { write_volatile(&raw mut OUT, acc) };
