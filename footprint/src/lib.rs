@@ -47,6 +47,34 @@ pub fn refused() -> ! {
     }
 }
 
+/// The panic handlers of a no-panic probe (`*_no_panic` firmware). In the build whose flash is
+/// measured, the handler calls a function that is declared but defined nowhere, so the probe
+/// links only if no panic path survives optimisation in what it calls; the measuring build
+/// (feature `measure`) stops with [`refused`] instead, so it can run under QEMU.
+#[macro_export]
+macro_rules! no_panic_probe {
+    () => {
+        #[cfg(not(feature = "measure"))]
+        mod no_panic {
+            unsafe extern "Rust" {
+                /// Defined nowhere: a call to it that survives optimisation fails the link.
+                fn a_panic_path_is_left() -> !;
+            }
+
+            #[panic_handler]
+            fn panic(_: &core::panic::PanicInfo) -> ! {
+                unsafe { a_panic_path_is_left() }
+            }
+        }
+
+        #[cfg(feature = "measure")]
+        #[panic_handler]
+        fn panic(_: &core::panic::PanicInfo) -> ! {
+            $crate::refused()
+        }
+    };
+}
+
 #[cfg(feature = "measure")]
 mod measure {
     // The stack is raw memory between two linker symbols: reading and repainting it needs raw

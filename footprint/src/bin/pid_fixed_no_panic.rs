@@ -90,21 +90,4 @@ fn main() -> ! {
     }
 }
 
-#[cfg(not(feature = "measure"))]
-mod no_panic {
-    unsafe extern "Rust" {
-        /// Defined nowhere: a call to it that survives optimisation fails the link.
-        fn a_panic_path_is_left() -> !;
-    }
-
-    #[panic_handler]
-    fn panic(_: &core::panic::PanicInfo) -> ! {
-        unsafe { a_panic_path_is_left() }
-    }
-}
-
-#[cfg(feature = "measure")]
-#[panic_handler]
-fn panic(_: &core::panic::PanicInfo) -> ! {
-    refused()
-}
+regler_footprint::no_panic_probe!();
