@@ -19,8 +19,9 @@ use common::Sim;
 use proptest::prelude::*;
 use regler_ring_transfer::{Mode, SlaveConfig};
 
-/// Runs a board through a master outage long enough to put it stand-alone; returns the step
-/// at which it was linked again, counted from the end of the outage.
+/// Runs a board through a master outage long enough to put it stand-alone, starting at the
+/// first step from `start` on at which the board is linked; returns the step at which it was
+/// linked again, counted from the end of the outage.
 fn outage<const N: usize>(config: SlaveConfig, delay: u64, start: u64, jitter: (u8, u64)) -> u64 {
     let mut sim: Sim<N> = Sim::new(config, 0, delay, u64::from(config.retry_after) << 8 | start);
     sim.down.late = jitter.0;
@@ -30,10 +31,23 @@ fn outage<const N: usize>(config: SlaveConfig, delay: u64, start: u64, jitter: (
     let ctx = format!("ring {N}, {config:?}, delay {delay}, outage from {start}");
     let row = u64::from(config.row_len);
     let length = u64::from(config.silence_limit) + N as u64 + 2 * row + 2 * delay + 20;
-    let end = start + length;
     let bound = u64::from(config.retry_after) + 4 * (delay + jitter.1) + row + 1;
-    let entries_before;
+    // A faulty link may itself put the board stand-alone before the outage (frames later than
+    // the silence limit, a ring shorter than the late refills need): the outage then starts at
+    // the first step from `start` on at which the board is linked, and it must get there.
     let mut now = 0;
+    while now < start || sim.slave.mode() != Mode::Linked {
+        sim.faulty = jitter.0 > 0;
+        sim.step(now);
+        now += 1;
+        assert!(
+            now <= start + 8 * (bound + length),
+            "{ctx}: never linked before the outage"
+        );
+    }
+    let start = now;
+    let end = start + length;
+    let entries_before;
     loop {
         if now == start {
             assert_eq!(
@@ -106,6 +120,29 @@ fn every_configuration_relinks_after_an_outage() {
         }
     }
     assert!(worst > 0);
+}
+
+/// The case CI's random draw found (ring 32 shorter than a row of 34–36, silence limit 3,
+/// delay 2, frames late by up to 3 more steps): the faulty link itself put the board
+/// stand-alone before the outage began (88 of these 1 200 runs), which the harness took for a
+/// failure. Every chance of a late frame and every jitter: the outage starts once the board is
+/// linked, and it relinks within the bound.
+#[test]
+fn a_board_the_faulty_link_put_stand_alone_before_the_outage() {
+    for row_len in [34, 36] {
+        for late in 0..200 {
+            for jitter in 1..4 {
+                let config = SlaveConfig {
+                    address: common::ADDRESS,
+                    row_len,
+                    silence_limit: 3,
+                    retry_after: 36,
+                    boot: 1,
+                };
+                outage::<32>(config, 2, 90, (late, jitter));
+            }
+        }
+    }
 }
 
 proptest! {
