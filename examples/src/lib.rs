@@ -3,21 +3,17 @@
 //! lives here so the integration tests can drive it directly.
 
 pub mod autonomous;
+pub mod cli;
 pub mod highway;
 pub mod knitter;
 pub mod mailbag;
 pub mod plc;
 pub mod svg;
 
-/// The end of every example's `main`: success, or the error on stderr (prefixed with the
-/// program's name) and exit code 2, never a panic.
+/// The end of every example's `main`: success (also when the reader closed the pipe), or the
+/// error on stderr (prefixed with the program's name) and exit code 2, never a panic. See
+/// [`cli::finish`].
 #[must_use]
-pub fn finish(program: &str, result: Result<(), String>) -> std::process::ExitCode {
-    match result {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("{program}: {e}");
-            std::process::ExitCode::from(2)
-        }
-    }
+pub fn finish<E: Into<cli::Stop>>(program: &str, result: Result<(), E>) -> std::process::ExitCode {
+    cli::finish(program, result.map_err(Into::into))
 }

@@ -7,6 +7,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
+use regler_examples::cli::{self, Common, Program, Stop};
 use regler_examples::highway::{self, Config, LineKind, Sim, Summary};
 use regler_examples::svg;
 
@@ -36,9 +37,6 @@ struct Args {
     /// Bit-error rate of every link.
     #[arg(long, default_value_t = 1e-5)]
     ber: f64,
-    /// Seed of the workload and the noise.
-    #[arg(long, default_value_t = 1976)]
-    seed: u64,
     /// Line encoding the noise acts on.
     #[arg(long, value_enum, default_value_t = Line::ByteSerial)]
     line: Line,
@@ -64,35 +62,37 @@ struct Args {
     /// instead of the highway.
     #[arg(long, requires = "ports")]
     panel: bool,
-    /// Print the summary as JSON.
-    #[arg(long)]
-    json: bool,
-    /// Where to write the per-crate picture (SVG).
-    #[arg(long, default_value = "serial-highway.svg")]
-    svg: PathBuf,
-    /// Write no picture.
-    #[arg(long)]
-    no_svg: bool,
-    /// No progress bar.
-    #[arg(long, short)]
-    quiet: bool,
+    #[command(flatten)]
+    common: Common<Highway>,
+}
+
+/// The program's name and defaults for the shared options.
+#[derive(Debug, Clone)]
+struct Highway;
+
+impl Program for Highway {
+    const NAME: &'static str = "serial-highway";
+    const SEED: u64 = 1976;
+    const PICTURE: &'static str = "serial-highway.svg";
+    const FORMAT: &'static str = "svg";
+    const NO_FORMAT: &'static str = "no-svg";
 }
 
 fn main() -> ExitCode {
-    regler_examples::finish("serial-highway", run(&Args::parse()))
+    cli::finish(Highway::NAME, run(&Args::parse()))
 }
 
-fn run(args: &Args) -> Result<(), String> {
+fn run(args: &Args) -> Result<(), Stop> {
     if let Some(ports) = &args.ports {
         let [driver_port, crate_port] = ports.as_slice() else {
             return Err("--ports needs two paths".into());
         };
         if args.panel {
             let keys: Vec<u8> = (0..5u64)
-                .map(|k| ((args.seed.wrapping_add(k) * 37) % 128) as u8)
+                .map(|k| ((args.common.seed.wrapping_add(k) * 37) % 128) as u8)
                 .collect();
             let summary = highway::ports::run_panel(driver_port, crate_port, &keys)?;
-            let text = if args.json {
+            let text = if args.common.json {
                 serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?
             } else {
                 format!(
@@ -106,15 +106,16 @@ fn run(args: &Args) -> Result<(), String> {
                     if summary.registers_match { "yes" } else { "NO" }
                 )
             };
-            emit(&text)?;
+            cli::print(&text)?;
             return if summary.registers_match && summary.keys_delivered == summary.keys_pressed {
                 Ok(())
             } else {
                 Err("the panel link over the ports lost or altered something".into())
             };
         }
-        let summary = highway::ports::run(driver_port, crate_port, args.messages, args.seed)?;
-        let text = if args.json {
+        let summary =
+            highway::ports::run(driver_port, crate_port, args.messages, args.common.seed)?;
+        let text = if args.common.json {
             serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?
         } else {
             format!(
@@ -129,7 +130,7 @@ fn run(args: &Args) -> Result<(), String> {
                 summary.clocks as f64 / summary.seconds.max(1e-9)
             )
         };
-        emit(&text)?;
+        cli::print(&text)?;
         return if summary.undetected_errors == 0 {
             Ok(())
         } else {
@@ -140,7 +141,7 @@ fn run(args: &Args) -> Result<(), String> {
         crates: args.crates,
         messages: args.messages,
         ber: args.ber,
-        seed: args.seed,
+        seed: args.common.seed,
         line: match args.line {
             Line::ByteSerial => LineKind::ByteSerial,
             Line::BitSerial => LineKind::BitSerial,
@@ -157,7 +158,7 @@ fn run(args: &Args) -> Result<(), String> {
             .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
         sim.set_script(highway::parse_script(&text, crates)?);
     }
-    let bar = if args.quiet || args.json {
+    let bar = if args.common.quiet || args.common.json {
         ProgressBar::hidden()
     } else {
         ProgressBar::new(args.messages)
@@ -174,25 +175,16 @@ fn run(args: &Args) -> Result<(), String> {
     }
     bar.finish_and_clear();
     let summary = sim.summary();
-    if !args.no_svg {
-        std::fs::write(&args.svg, picture(&summary))
-            .map_err(|e| format!("cannot write {}: {e}", args.svg.display()))?;
+    if let Some(path) = args.common.picture() {
+        std::fs::write(path, picture(&summary))
+            .map_err(|e| format!("cannot write {}: {}", path.display(), cli::io_message(&e)))?;
     }
-    let text = if args.json {
+    let text = if args.common.json {
         serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?
     } else {
         summary_text(&summary, args)
     };
-    emit(&text)
-}
-
-/// Writes `text` to stdout; a reader that stops early (`| head`) is not an error of ours.
-fn emit(text: &str) -> Result<(), String> {
-    use std::io::Write;
-    match writeln!(std::io::stdout().lock(), "{text}") {
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(format!("cannot write: {e}")),
-        _ => Ok(()),
-    }
+    cli::print(&text)
 }
 
 fn summary_text(s: &Summary, args: &Args) -> String {
@@ -261,8 +253,8 @@ fn summary_text(s: &Summary, args: &Args) -> String {
     if s.crates.len() > 12 {
         println!("  (all {} crates: --json, or the picture)", s.crates.len());
     }
-    if !args.no_svg {
-        println!("  picture: {}", args.svg.display());
+    if let Some(path) = args.common.picture() {
+        println!("  picture: {}", path.display());
     }
     out.trim_end().to_string()
 }
