@@ -16,12 +16,30 @@ pub struct Series<'a> {
     pub points: Vec<(f64, f64)>,
 }
 
-const W: f64 = 720.0;
 const H: f64 = 420.0;
 const LEFT: f64 = 70.0;
-const RIGHT: f64 = 190.0;
+/// The plot's width; the legend to its right takes what its longest label needs.
+const PLOT_W: f64 = 460.0;
 const TOP: f64 = 50.0;
 const BOTTOM: f64 = 55.0;
+/// Legend text at 11 px: a generous average glyph width, so a label never touches the edge.
+const LEGEND_GLYPH: f64 = 6.6;
+
+/// The picture's width: the plot, and a legend as wide as its longest label.
+#[derive(Clone, Copy, Debug)]
+struct Frame {
+    width: f64,
+}
+
+impl Frame {
+    fn for_legend<'a>(labels: impl Iterator<Item = &'a str>) -> Self {
+        let longest = labels.map(|l| l.chars().count()).max().unwrap_or(0);
+        let legend = 15.0 + 28.0 + LEGEND_GLYPH * longest as f64 + 15.0;
+        Self {
+            width: (LEFT + PLOT_W + legend.max(190.0)).ceil(),
+        }
+    }
+}
 
 fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -84,19 +102,59 @@ pub fn line_chart_fitted(
     chart(title, x_label, y_label, series, markers, marker_label, true)
 }
 
-/// A round axis range covering `lo..=hi`: five grid steps of 1, 2 or 5 times a power of ten.
+/// A round axis covering `lo..=hi` and fitted to it: the smallest step of 1, 2 or 5 times a
+/// power of ten that covers the data in at most eight steps, from the step below `lo` to the
+/// step above `hi` (data ending at 525 gets an axis to 600, not 1 000).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Axis {
+    start: f64,
+    step: f64,
+    steps: u32,
+}
+
+impl Axis {
+    fn fitted(lo: f64, hi: f64) -> Self {
+        if !(lo.is_finite() && hi.is_finite() && hi >= lo) {
+            return Self {
+                start: 0.0,
+                step: 0.2,
+                steps: 5,
+            };
+        }
+        let mut step = nice_ceiling(
+            ((hi - lo) / 8.0)
+                .max(hi.abs().max(lo.abs()) * 1e-9)
+                .max(1e-12),
+        );
+        loop {
+            let start = (lo / step).floor() * step;
+            let steps = ((hi - start) / step - 1e-9).ceil().max(1.0);
+            if steps <= 8.0 {
+                return Self {
+                    start,
+                    step,
+                    // At most 8: the cast is exact.
+                    steps: steps as u32,
+                };
+            }
+            step = nice_ceiling(step * 1.000_001);
+        }
+    }
+
+    fn end(self) -> f64 {
+        self.start + self.step * f64::from(self.steps)
+    }
+
+    fn tick(self, i: u32) -> f64 {
+        self.start + self.step * f64::from(i)
+    }
+}
+
+/// The round range of [`Axis::fitted`].
+#[cfg(test)]
 fn nice_range(lo: f64, hi: f64) -> (f64, f64) {
-    if !(lo.is_finite() && hi.is_finite()) {
-        return (0.0, 1.0);
-    }
-    let mut step = nice_ceiling(((hi - lo) / 5.0).max(1e-9));
-    let mut start = (lo / step).floor() * step;
-    // Flooring the start can push the top past five steps: take the next round step then.
-    while start + 5.0 * step < hi {
-        step = nice_ceiling(step * 1.000_001);
-        start = (lo / step).floor() * step;
-    }
-    (start, start + 5.0 * step)
+    let a = Axis::fitted(lo, hi);
+    (a.start, a.end())
 }
 
 fn chart(
@@ -109,21 +167,32 @@ fn chart(
     fit_y: bool,
 ) -> String {
     let points = series.iter().flat_map(|s| s.points.iter());
-    let x_max = nice_ceiling(points.clone().map(|p| p.0).fold(0.0, f64::max));
-    let (y_min, y_max) = if fit_y {
-        let lo = points.clone().map(|p| p.1).fold(f64::INFINITY, f64::min);
-        let hi = points.map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
-        nice_range(lo, hi)
+    let finite = |v: &f64| v.is_finite();
+    let xs = points.clone().map(|p| p.0).filter(finite);
+    let x_axis = Axis::fitted(xs.clone().fold(0.0, f64::min), xs.fold(0.0, f64::max));
+    let ys = points.map(|p| p.1).filter(finite);
+    let y_axis = if fit_y {
+        Axis::fitted(
+            ys.clone().fold(f64::INFINITY, f64::min),
+            ys.fold(f64::NEG_INFINITY, f64::max),
+        )
     } else {
-        (0.0, nice_ceiling(points.map(|p| p.1).fold(0.0, f64::max)))
+        Axis::fitted(ys.clone().fold(0.0, f64::min), ys.fold(0.0, f64::max))
     };
-    let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
-    let sx = |x: f64| LEFT + pw * x / x_max;
+    let labels = series
+        .iter()
+        .map(|s| s.label)
+        .chain((!markers.is_empty()).then_some(marker_label));
+    let frame = Frame::for_legend(labels);
+    let (pw, ph) = (PLOT_W, H - TOP - BOTTOM);
+    let (x0, x1) = (x_axis.start, x_axis.end());
+    let sx = |x: f64| LEFT + pw * (x - x0) / (x1 - x0);
+    let (y_min, y_max) = (y_axis.start, y_axis.end());
     let sy = |y: f64| TOP + ph * (1.0 - (y - y_min) / (y_max - y_min));
-    let mut svg = header(title);
-    grid_between(&mut svg, y_min, y_max);
-    for i in 0..=5 {
-        let fx = x_max * f64::from(i) / 5.0;
+    let mut svg = header(title, frame);
+    grid(&mut svg, y_axis);
+    for i in 0..=x_axis.steps {
+        let fx = x_axis.tick(i);
         let _ = writeln!(
             svg,
             r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">{}</text>"#,
@@ -132,7 +201,7 @@ fn chart(
             trim(fx)
         );
     }
-    axes(&mut svg, x_label, y_label);
+    axes(&mut svg, frame, x_label, y_label);
     for (i, s) in series.iter().enumerate() {
         let path: Vec<String> = s
             .points
@@ -160,7 +229,7 @@ fn chart(
                 s.colour
             );
         }
-        legend(&mut svg, i, s.label, s.colour, s.dashed);
+        legend(&mut svg, frame, i, s.label, s.colour, s.dashed);
     }
     // Markers closer than 5 px are spread apart, so that two commits at once show as two.
     let mut last_x = f64::NEG_INFINITY;
@@ -174,7 +243,7 @@ fn chart(
         );
     }
     if !markers.is_empty() {
-        legend(&mut svg, series.len(), marker_label, "#8e44ad", true);
+        legend(&mut svg, frame, series.len(), marker_label, "#8e44ad", true);
     }
     svg.push_str("</svg>\n");
     svg
@@ -188,17 +257,21 @@ pub fn bar_chart(
     categories: &[String],
     series: &[(&str, &str, Vec<f64>)],
 ) -> String {
-    let y_max = nice_ceiling(
+    let y_axis = Axis::fitted(
+        0.0,
         series
             .iter()
             .flat_map(|s| s.2.iter().copied())
+            .filter(|v| v.is_finite())
             .fold(0.0, f64::max),
     );
-    let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
+    let y_max = y_axis.end();
+    let frame = Frame::for_legend(series.iter().map(|s| s.0));
+    let (pw, ph) = (PLOT_W, H - TOP - BOTTOM);
     let sy = |y: f64| TOP + ph * (1.0 - y / y_max);
-    let mut svg = header(title);
-    horizontal_grid(&mut svg, y_max);
-    axes(&mut svg, "", y_label);
+    let mut svg = header(title, frame);
+    grid(&mut svg, y_axis);
+    axes(&mut svg, frame, "", y_label);
     let group_w = pw / categories.len().max(1) as f64;
     let bar_w = group_w * 0.8 / series.len().max(1) as f64;
     for (g, category) in categories.iter().enumerate() {
@@ -232,47 +305,44 @@ pub fn bar_chart(
         );
     }
     for (i, (label, colour, _)) in series.iter().enumerate() {
-        legend(&mut svg, i, label, colour, false);
+        legend(&mut svg, frame, i, label, colour, false);
     }
     svg.push_str("</svg>\n");
     svg
 }
 
-/// Five horizontal grid lines with their values, 0 to `y_max`.
-fn horizontal_grid(svg: &mut String, y_max: f64) {
-    grid_between(svg, 0.0, y_max);
-}
-
-/// Five horizontal grid lines with their values, `y_min` to `y_max`.
-fn grid_between(svg: &mut String, y_min: f64, y_max: f64) {
-    let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
-    for i in 0..=5 {
-        let fy = y_min + (y_max - y_min) * f64::from(i) / 5.0;
-        let y = TOP + ph * (1.0 - f64::from(i) / 5.0);
+/// The horizontal grid lines of `axis`, with their values.
+fn grid(svg: &mut String, axis: Axis) {
+    let ph = H - TOP - BOTTOM;
+    for i in 0..=axis.steps {
+        let y = TOP + ph * (1.0 - f64::from(i) / f64::from(axis.steps));
         let _ = writeln!(
             svg,
             r##"<line x1="{LEFT}" x2="{:.1}" y1="{y:.1}" y2="{y:.1}" stroke="#ddd"/><text x="{:.1}" y="{:.1}" text-anchor="end">{}</text>"##,
-            LEFT + pw,
+            LEFT + PLOT_W,
             LEFT - 6.0,
             y + 4.0,
-            trim(fy),
+            trim(axis.tick(i)),
         );
     }
 }
 
-fn header(title: &str) -> String {
+fn header(title: &str, frame: Frame) -> String {
+    let w = frame.width;
+    // The title is as wide as the picture allows: a long one is set smaller rather than cut.
+    let size = (16.0f64).min((w - 20.0) / (0.55 * title.chars().count().max(1) as f64));
     format!(
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" font-family="sans-serif" font-size="12">
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{H}" viewBox="0 0 {w} {H}" font-family="sans-serif" font-size="12">
 <rect width="100%" height="100%" fill="white"/>
-<text x="{:.1}" y="28" text-anchor="middle" font-size="16" font-weight="bold">{}</text>
+<text x="{:.1}" y="28" text-anchor="middle" font-size="{size:.1}" font-weight="bold">{}</text>
 "#,
-        W / 2.0,
+        w / 2.0,
         escape(title)
     )
 }
 
-fn axes(svg: &mut String, x_label: &str, y_label: &str) {
-    let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
+fn axes(svg: &mut String, _frame: Frame, x_label: &str, y_label: &str) {
+    let (pw, ph) = (PLOT_W, H - TOP - BOTTOM);
     let _ = writeln!(
         svg,
         r#"<line x1="{LEFT}" x2="{LEFT}" y1="{TOP}" y2="{:.1}" stroke="black"/><line x1="{LEFT}" x2="{:.1}" y1="{:.1}" y2="{:.1}" stroke="black"/>"#,
@@ -292,8 +362,8 @@ fn axes(svg: &mut String, x_label: &str, y_label: &str) {
     );
 }
 
-fn legend(svg: &mut String, i: usize, label: &str, colour: &str, dashed: bool) {
-    let x = W - RIGHT + 15.0;
+fn legend(svg: &mut String, _frame: Frame, i: usize, label: &str, colour: &str, dashed: bool) {
+    let x = LEFT + PLOT_W + 15.0;
     let y = TOP + 10.0 + 20.0 * i as f64;
     let dash = if dashed {
         r#" stroke-dasharray="6 4""#
@@ -320,11 +390,53 @@ mod tests {
     use super::*;
 
     #[test]
-    fn nice_ranges_cover_the_data_in_five_round_steps() {
-        assert_eq!(nice_range(15.2, 22.4), (14.0, 24.0));
+    fn axes_are_fitted_to_their_data_in_round_steps() {
+        assert_eq!(nice_range(15.2, 22.4), (15.0, 23.0));
         assert_eq!(nice_range(0.0, 10.0), (0.0, 10.0));
-        let (a, b) = nice_range(-3.7, 41.0);
-        assert!(a <= -3.7 && b >= 41.0, "{a} {b}");
+        // Data ending at 525 min: an axis to 600, not to 1 000; 62 crates: to 70, not 100.
+        assert_eq!(nice_range(0.0, 525.0), (0.0, 600.0));
+        assert_eq!(nice_range(0.0, 62.0), (0.0, 70.0));
+        assert_eq!(nice_range(0.0, 48.0 * 3600.0).1, 200_000.0);
+        for (lo, hi) in [
+            (-3.7, 41.0),
+            (0.0, 1e-7),
+            (3.0, 3.0),
+            (-1e6, -2.0),
+            (0.0, 625.0),
+        ] {
+            let a = Axis::fitted(lo, hi);
+            assert!(a.start <= lo && a.end() >= hi, "{lo} {hi}: {a:?}");
+            assert!((1..=8).contains(&a.steps), "{lo} {hi}: {a:?}");
+            // Fitted: one step less would not cover the data.
+            assert!(
+                a.end() - a.step < hi || a.start + a.step > lo || hi == lo,
+                "{lo} {hi}: {a:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_long_legend_widens_the_picture() {
+        let s = |label| Series {
+            label,
+            colour: "red",
+            dashed: false,
+            points: vec![(0.0, 1.0), (1.0, 2.0)],
+        };
+        let narrow = line_chart("t", "x", "y", &[s("a")]);
+        assert!(narrow.contains(r#"width="720""#), "{narrow}");
+        let label = "errors caught by the crate controller, per 1000";
+        let wide = line_chart("t", "x", "y", &[s(label)]);
+        let w: f64 = wide
+            .split("width=\"")
+            .nth(1)
+            .and_then(|t| t.split('"').next())
+            .and_then(|t| t.parse().ok())
+            .unwrap();
+        assert!(
+            w >= LEFT + PLOT_W + 15.0 + 28.0 + 6.0 * label.len() as f64,
+            "{w}"
+        );
     }
 
     #[test]
