@@ -3,7 +3,7 @@
 //! pipe, and the end of `main`.
 //!
 //! A program names its defaults once ([`Program`]), flattens [`Common`] into its own clap
-//! arguments, writes everything for the user through [`print`] / [`Out`], and returns a
+//! arguments, writes everything for the user through [`print()`] / [`Out`], and returns a
 //! [`Stop`] from its `run` to [`finish`]. User-facing text is built with `Display` only — never
 //! `{:?}` — so a type's Rust spelling never reaches the user.
 
@@ -185,7 +185,7 @@ impl Out {
     /// Writes `text` (no newline added).
     ///
     /// # Errors
-    /// As [`print`].
+    /// As [`print()`].
     pub fn text(&mut self, text: &str) -> Result<(), Stop> {
         self.inner
             .write_all(text.as_bytes())
@@ -195,7 +195,7 @@ impl Out {
     /// Writes `text` and a newline.
     ///
     /// # Errors
-    /// As [`print`].
+    /// As [`print()`].
     pub fn line(&mut self, text: &str) -> Result<(), Stop> {
         self.text(text)?;
         self.text("\n")
@@ -204,7 +204,7 @@ impl Out {
     /// Sends what is buffered (before the program waits for input, and at the end).
     ///
     /// # Errors
-    /// As [`print`].
+    /// As [`print()`].
     pub fn flush(&mut self) -> Result<(), Stop> {
         self.inner.flush().map_err(|e| stop_for(&e))
     }

@@ -330,7 +330,7 @@ fn grid(svg: &mut String, axis: Axis) {
 fn header(title: &str, frame: Frame) -> String {
     let w = frame.width;
     // The title is as wide as the picture allows: a long one is set smaller rather than cut.
-    let size = (16.0f64).min((w - 20.0) / (0.55 * title.chars().count().max(1) as f64));
+    let size = (16.0f64).min((w - 20.0) / (0.62 * title.chars().count().max(1) as f64));
     format!(
         r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{H}" viewBox="0 0 {w} {H}" font-family="sans-serif" font-size="12">
 <rect width="100%" height="100%" fill="white"/>
