@@ -1,271 +1,23 @@
-//! The 1985 autonomous PID controller (source 002) on a simulated process, run in simulated
-//! time on `regler-pid`'s [`Station`], operated through the source's terminal dialogue or its
-//! keypad and LCD.
+//! The controller on the crate: `regler_pid::Station` sampling the simulated process through the
+//! source's 12-bit A/D and driving it through its 8-bit D/A (or a three-point motor), in
+//! simulated time, with the terminal and the keypad in front of it; and the run of a whole
+//! script ([`run`]), which measures the loop as it goes (IAE, the first step's overshoot and
+//! settling time, alarms, commits).
 //!
-//! # Processes
-//! - **room**: a room heated by a 0–10 V heater through a first-order lag (time constant
-//!   30 min) with a dead time of 2 min; 10 V holds the room 40 °C above the outdoor temperature,
-//!   which follows a daily sine (mean `outdoor_mean`, ±5 °C) plus seeded weather noise.
-//!   Scale 0–40 °C.
-//! - **tank**: a tank level fed by a 0–10 V pump, first-order, time constant 30 s, no dead time;
-//!   10 V would hold 150 % with the outflow valve shut (the pump sized for the largest outflow
-//!   with margin); the valve moves every five minutes (a seeded random walk, 0–30 % of the
-//!   inflow range).
-//!   Scale 0–100 %.
-//!
-//! The measurement goes through the source's 12-bit A/D and the output through its 8-bit D/A.
-//!
-//! # Scripts
-//! One command a line, `TIME KIND ARGUMENTS`; `#` starts a comment. TIME is seconds, or with a
-//! unit `90s`, `15m`, `2h`, or a clock time `hh:mm`. KIND is
-//! - `term TEXT`: a line typed at the terminal (start-up answers, `Y` for the change mode, `C`);
-//!   `term` alone is an empty line (CR);
-//! - `keys KEYS`: keys pressed on the keypad, e.g. `keys * 21 * A 22 A D` (set-point 22 on the room's 0–40 °C scale; the source's own example keyed 150 on its scale);
-//! - `night on|off`: the night input (set-back);
-//! - `outdoor DELTA`: a step in the outdoor temperature (room) or outflow (tank), in scale units.
+//! Timing: the plant integrates in steps of [`ProcessKind`]'s `dt` (1 s room, 0.1 s tank); the
+//! controller samples when its period S is due; a script's inputs act at the first step at or
+//! after their time; an interactive operator's at the step the plant has reached.
 
-pub mod benchmark;
-pub mod keypad;
-pub mod terminal;
+use std::ops::ControlFlow;
 
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use regler_pid::{Config, OperatorLimits, Parameters, Scaling, Station};
 use serde::Serialize;
 
-use self::keypad::{KeyEffect, Keypad};
-use self::terminal::{Startup, Terminal};
-
-/// The simulated process.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ProcessKind {
-    /// A heated room (slow, dead time, outdoor disturbance).
-    Room,
-    /// A tank level (fast).
-    Tank,
-}
-
-impl ProcessKind {
-    /// The measurement scale.
-    #[must_use]
-    pub fn scale(self) -> (f64, f64) {
-        match self {
-            ProcessKind::Room => (0.0, 40.0),
-            ProcessKind::Tank => (0.0, 100.0),
-        }
-    }
-
-    /// Integration step, seconds.
-    fn dt(self) -> f64 {
-        match self {
-            ProcessKind::Room => 1.0,
-            ProcessKind::Tank => 0.1,
-        }
-    }
-}
-
-/// Which operator interface starts the controller.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Interface {
-    /// The terminal: the script's first `term` lines answer the start-up questions.
-    Terminal,
-    /// The keypad only: the source's keypad start-up values (PID, S = 1 s, KP = 10, TI = 8,
-    /// 0–10 V, WIN = SCALEMIN).
-    Keypad,
-}
-
-/// One operator or plant input.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-#[serde(tag = "kind", content = "value", rename_all = "lowercase")]
-pub enum Input {
-    /// A line at the terminal.
-    Term(String),
-    /// Keys on the keypad.
-    Keys(String),
-    /// The night input.
-    Night(bool),
-    /// A disturbance step.
-    Outdoor(f64),
-}
-
-impl std::fmt::Display for Input {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Input::Term(line) => write!(f, "term {line}"),
-            Input::Keys(keys) => write!(f, "keys {keys}"),
-            Input::Night(on) => write!(f, "night {}", if *on { "on" } else { "off" }),
-            Input::Outdoor(delta) => write!(f, "outdoor {delta:+}"),
-        }
-    }
-}
-
-/// A timed input.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Event {
-    /// Seconds from the start.
-    pub t_s: f64,
-    /// The input.
-    pub input: Input,
-}
-
-/// Parses a script (see the module docs). Errors name the line.
-pub fn parse_script(text: &str) -> Result<Vec<Event>, String> {
-    let mut events = Vec::new();
-    for (n, raw) in text.lines().enumerate() {
-        let line = raw.split('#').next().unwrap_or("").trim_end();
-        if line.trim().is_empty() {
-            continue;
-        }
-        let err = |what: &str| format!("script line {}: {what}: '{}'", n + 1, raw.trim());
-        let mut parts = line.trim_start().splitn(3, char::is_whitespace);
-        let time = parts.next().ok_or_else(|| err("missing time"))?;
-        let kind = parts
-            .next()
-            .ok_or_else(|| err("missing command (term, keys, night, outdoor)"))?;
-        let rest = parts.next().unwrap_or("").trim();
-        let t_s = parse_time(time)
-            .ok_or_else(|| err("bad time (use 600, 90s, 15m, 2h or hh:mm, within a year)"))?;
-        let input = match kind {
-            "term" => Input::Term(rest.to_string()),
-            "keys" => Input::Keys(rest.to_string()),
-            "night" => match rest {
-                "on" => Input::Night(true),
-                "off" => Input::Night(false),
-                _ => return Err(err("night takes on or off")),
-            },
-            "outdoor" => Input::Outdoor(
-                rest.parse::<f64>()
-                    .ok()
-                    .filter(|v| v.is_finite())
-                    .ok_or_else(|| err("outdoor takes a number"))?,
-            ),
-            _ => return Err(err("unknown command (term, keys, night, outdoor)")),
-        };
-        events.push(Event { t_s, input });
-    }
-    events.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
-    Ok(events)
-}
-
-/// Script times end at a year, the longest run.
-const LAST_SCRIPT_S: f64 = 8760.0 * 3600.0;
-
-fn parse_time(s: &str) -> Option<f64> {
-    let value = if let Some((h, m)) = s.split_once(':') {
-        let (h, m) = (h.parse::<f64>().ok()?, m.parse::<f64>().ok()?);
-        (m < 60.0).then_some(h * 3600.0 + m * 60.0)?
-    } else if let Some(v) = s.strip_suffix('h') {
-        v.parse::<f64>().ok()? * 3600.0
-    } else if let Some(v) = s.strip_suffix('m') {
-        v.parse::<f64>().ok()? * 60.0
-    } else if let Some(v) = s.strip_suffix('s') {
-        v.parse::<f64>().ok()?
-    } else {
-        s.parse::<f64>().ok()?
-    };
-    (value.is_finite() && (0.0..=LAST_SCRIPT_S).contains(&value)).then_some(value)
-}
-
-/// The script used when none is given, one for each way of operating the controller.
-///
-/// At the terminal: the start-up dialogue, a set-point change on the keypad, an illegal value,
-/// the alarm acknowledged, a night set-back, a disturbance and a retune in the change mode. On
-/// the keypad alone: every parameter keyed in from the source's keypad start-up values, then the
-/// same day of operation on the keys.
-#[must_use]
-pub fn demo_script(process: ProcessKind, interface: Interface) -> &'static str {
-    match (process, interface) {
-        (ProcessKind::Room, Interface::Terminal) => {
-            "# start-up dialogue at the terminal
-0 term PID
-0 term 10       # S
-0 term 0        # YMIN
-0 term 10       # YMAX
-0 term 0.5      # DYMAX
-0 term 2        # KP
-0 term 900      # TI
-0 term 60       # TD
-0 term 0        # SCALE MIN
-0 term 40       # SCALE MAX
-0 term DIR
-0 term 1.5      # RFEL
-0 term 20       # WIN
-0 term
-# the keypad: WIN 20 -> 22 (the source's example keyed 150 on its own scale)
-4h keys * 21 * A 22 A D
-# an illegal value stays on the LCD; D with nothing staged is no commit
-5h keys * 51 * A 20000 A
-5h keys D
-6h term C
-# night set-back from 22:00 to 06:00
-22:00 night on
-30:00 night off
-# a cold snap
-36h outdoor -8
-# retune in the change mode: keep TYP and WIN, S 10, KP 3, TI 1200, then quit
-40h term Y
-40h term
-40h term
-40h term
-40h term 3
-40h term 1200
-40h term Q
-"
-        }
-        (ProcessKind::Room, Interface::Keypad) => {
-            "# the keypad alone: from its start-up values (PID, K 10, Ti 8 s, 1 s, WIN 0) to a room
-0 keys * 31 * A 10 A         # S 10 s
-0 keys * 51 * A 2 A          # KP 2
-0 keys * 71 * A 900 A        # TI 900 s
-0 keys * 61 * A 60 A         # TD 60 s
-0 keys * 83 * A 0.5 A        # DYMAX 0.5 V a sample
-0 keys * 41 * A 1.5 A        # RFEL 1.5
-0 keys * 21 * A 20 A D       # WIN 20, and commit them all at the next sample
-4h keys * 21 * A 22 A D
-5h keys * 51 * A 20000 A     # ILLEGAL VALUE stays on the LCD
-5h keys D                    # nothing staged: no commit
-6h keys C                    # acknowledge the alarm
-22:00 night on
-30:00 night off
-36h outdoor -8
-40h keys * 51 * A 3 A * 71 * A 1200 A D
-"
-        }
-        (ProcessKind::Tank, Interface::Terminal) => {
-            "0 term PI
-0 term 1        # S
-0 term 0
-0 term 10
-0 term 0        # DYMAX: no limit
-0 term 1.5      # KP
-0 term 40       # TI
-0 term 0
-0 term 100
-0 term DIR
-0 term 5        # RFEL
-0 term 50       # WIN
-0 term
-10m keys * 21 * A 70 A D
-20m outdoor 10
-30m keys * 10 * A P I D A * 61 * A 1 A D
-"
-        }
-        (ProcessKind::Tank, Interface::Keypad) => {
-            "# the keypad alone: a PI for the tank from the keypad start-up values
-0 keys * 10 * A P I A        # TYP PI
-0 keys * 51 * A 1.5 A        # KP 1.5
-0 keys * 71 * A 40 A         # TI 40 s
-0 keys * 41 * A 5 A          # RFEL 5 %
-0 keys * 21 * A 50 A D       # WIN 50 %, commit
-10m keys * 21 * A 70 A D
-20m outdoor 10
-30m keys * 10 * A P I D A * 61 * A 1 A D
-"
-        }
-    }
-}
+use super::keypad::{self, KeyEffect, Keypad};
+use super::plant::{HEATER_GAIN, Motor, Plant};
+use super::script::{Event, Input};
+use super::terminal::{Startup, Terminal};
+use super::{Interface, ProcessKind};
 
 /// Simulation parameters (the example's command line).
 #[derive(Clone, Debug, Serialize)]
@@ -348,288 +100,101 @@ pub struct SimReport {
     pub shown: Vec<Shown>,
     /// The LCD at the end.
     pub final_lcd: String,
+    /// Hours simulated: `config.hours`, or less when the operator quit early.
+    pub simulated_h: f64,
+    /// Script lines the controller refused (a start-up answer out of range, a change-mode value,
+    /// a WRONG COMMAND at the terminal).
+    pub refused: Vec<Refusal>,
 }
 
-/// Room heater: degrees above outdoor per volt at steady state.
-const HEATER_GAIN: f64 = 4.0;
-/// Tank level, %, that 1 V of pump holds against a shut outflow valve: the pump is sized for
-/// the largest outflow (30 % of the inflow range, plus disturbances) with margin, as one would
-/// commission it, so the loop controls instead of saturating at 10 V.
-const PUMP_GAIN: f64 = 15.0;
-
-struct Plant {
-    kind: ProcessKind,
-    x: f64,
-    delay: std::collections::VecDeque<f64>,
-    disturbance: f64,
-    noise: f64,
-    rng: ChaCha8Rng,
-    outdoor_mean: f64,
-}
-
-impl Plant {
-    fn new(kind: ProcessKind, seed: u64, outdoor_mean: f64) -> Plant {
-        let delay_steps = match kind {
-            ProcessKind::Room => 120,
-            ProcessKind::Tank => 0,
-        };
-        let x = match kind {
-            ProcessKind::Room => 15.0,
-            ProcessKind::Tank => 20.0,
-        };
-        Plant {
-            kind,
-            x,
-            delay: std::iter::repeat_n(0.0, delay_steps).collect(),
-            disturbance: 0.0,
-            noise: 0.0,
-            rng: ChaCha8Rng::seed_from_u64(seed),
-            outdoor_mean,
-        }
-    }
-
-    /// Outdoor temperature (room) at `t`.
-    fn outdoor(&self, t: f64) -> f64 {
-        let day = 2.0 * std::f64::consts::PI * (t / 86_400.0 - 0.625);
-        self.outdoor_mean + 5.0 * day.sin() + self.disturbance + self.noise
-    }
-
-    fn step(&mut self, t: f64, u: f64) {
-        let dt = self.kind.dt();
-        self.delay.push_back(u);
-        let applied = self.delay.pop_front().unwrap_or(u);
-        match self.kind {
-            ProcessKind::Room => {
-                // Weather noise: a slow random walk, pulled back toward zero.
-                self.noise += dt * (-self.noise / 7200.0) + 0.01 * (self.rng.random::<f64>() - 0.5);
-                let target = self.outdoor(t) + HEATER_GAIN * applied;
-                self.x += dt * (target - self.x) / 1800.0;
-            }
-            ProcessKind::Tank => {
-                // The outflow valve moves every five minutes, within its range.
-                if (t / 300.0).fract() < dt / 300.0 {
-                    self.noise = (self.noise + self.rng.random_range(-2.0..2.0)).clamp(0.0, 30.0);
-                }
-                let target = PUMP_GAIN * applied - self.disturbance - self.noise;
-                self.x += dt * (target - self.x) / 30.0;
-                self.x = self.x.clamp(0.0, 100.0);
-            }
-        }
-    }
-}
-
-/// What `--autotune` did: the relay experiment on the simulated process, the tuning it gave, and
-/// the tuned loop's answer to a set-point step.
+/// A script line the terminal refused, with the controller's answer.
 #[derive(Clone, Debug, Serialize)]
-pub struct AutotuneReport {
-    /// The process.
-    pub process: ProcessKind,
-    /// Output the process was steadied at before the experiment (V).
-    pub bias_v: f64,
-    /// Relay amplitude (V) and hysteresis (scale units).
-    pub relay_v: f64,
-    /// Hysteresis, scale units.
-    pub hysteresis: f64,
-    /// Ultimate gain (V per scale unit) and period (s), or why the experiment failed.
-    pub ultimate: Result<(f64, f64), String>,
-    /// Seconds the experiment took.
-    pub experiment_s: f64,
-    /// The tuned PI: K, Ti (Ziegler–Nichols from Ku, Tu).
-    pub k: f64,
-    /// Integral time, s.
-    pub ti: f64,
-    /// Set-point step applied after the hand-over (scale units).
-    pub step: f64,
-    /// Largest output jump at the hand-over (V): bumpless means small.
-    pub handover_jump_v: f64,
-    /// Overshoot of the step, percent of the step.
-    pub overshoot_pct: f64,
-    /// Seconds until the measurement stays within 5 % of the step.
-    pub settling_s: Option<f64>,
-    /// (t s, set-point, measurement, output V, relay on) every few seconds.
-    pub trace: Vec<(f64, f64, f64, f64, bool)>,
+pub struct Refusal {
+    /// The script's line.
+    pub line: usize,
+    /// What it typed.
+    pub input: String,
+    /// What the controller answered.
+    pub reply: String,
 }
 
-/// Runs the relay experiment on the simulated `kind` (steadied first at half output), tunes a PI
-/// controller by Ziegler–Nichols, hands over bumplessly and answers a set-point step.
+impl std::fmt::Display for Refusal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "script line {}: the controller refused `{}`: {}",
+            self.line, self.input, self.reply
+        )
+    }
+}
+
+/// Checks the configuration and the script against what a plant can have (the program's
+/// argument parsers check the plain ranges first; this is the check of what depends on the
+/// process, and the library's own guard). Errors name the option or the script line.
 ///
 /// # Errors
-/// Only for a relay configuration the process cannot take (never with these values).
-pub fn autotune(kind: ProcessKind, seed: u64, outdoor_mean: f64) -> Result<AutotuneReport, String> {
-    use regler_pid::tuning::{Relay, RelayConfig, RelayStep, ziegler_nichols};
-    use regler_pid::{Kind, Pid};
-    let dt = kind.dt();
-    let (bias, amplitude, hysteresis, step, timeout) = match kind {
-        ProcessKind::Room => (4.0, 2.0, 0.1, 2.0, 6.0 * 3600.0),
-        ProcessKind::Tank => (3.0, 1.5, 1.0, 10.0, 1800.0),
+/// The first value out of its range, in the words of [`cli::real`](crate::cli::real).
+pub fn validate(config: &SimConfig) -> Result<(), String> {
+    use crate::cli::number;
+    let out_of = |option: &str, lo: f64, hi: f64, what: &str, got: f64| {
+        format!(
+            "{option}: must be from {} to {}{what}, got {}",
+            number(lo),
+            number(hi),
+            number(got)
+        )
     };
-    let mut plant = Plant::new(kind, seed, outdoor_mean);
-    let mut t = 0.0;
-    let mut trace = Vec::new();
-    let every = match kind {
-        ProcessKind::Room => 30.0,
-        ProcessKind::Tank => 1.0,
-    };
-    let record = |t: f64, r: f64, y: f64, u: f64, relay: bool, trace: &mut Vec<_>| {
-        if (t / every).fract() < dt / every {
-            trace.push((t, r, y, u, relay));
-        }
-    };
-    // Steady at the bias.
-    let settle = match kind {
-        ProcessKind::Room => 4.0 * 3600.0,
-        ProcessKind::Tank => 300.0,
-    };
-    while t < settle {
-        plant.step(t, bias);
-        t += dt;
-    }
-    let setpoint = plant.x;
-    let config = RelayConfig {
-        bias,
-        amplitude,
-        hysteresis,
-        h: dt,
-        cycles: 3,
-        tolerance: 0.1,
-        timeout,
-        ..RelayConfig::default()
-    };
-    let mut relay = Relay::new(config).map_err(|e| e.to_string())?;
-    let start = t;
-    let outcome = loop {
-        let y = plant.x;
-        match relay.update(setpoint, y) {
-            Ok(RelayStep::Running(u)) => {
-                record(t - start, setpoint, y, u, true, &mut trace);
-                plant.step(t, u);
-                t += dt;
-            }
-            Ok(RelayStep::Done(found)) => break Ok(found),
-            Err(e) => break Err(e.to_string()),
-        }
-    };
-    let experiment_s = t - start;
-    let ultimate = outcome.map(|u| (u.ku, u.tu));
-    let Ok((ku, tu)) = ultimate else {
-        return Ok(AutotuneReport {
-            process: kind,
-            bias_v: bias,
-            relay_v: amplitude,
-            hysteresis,
-            ultimate,
-            experiment_s,
-            k: 0.0,
-            ti: 0.0,
-            step,
-            handover_jump_v: 0.0,
-            overshoot_pct: 0.0,
-            settling_s: None,
-            trace,
-        });
-    };
-    let tuning = ziegler_nichols(regler_pid::tuning::Ultimate { ku, tu }, Kind::PI)
-        .map_err(|e| e.to_string())?;
-    let mut pid_config = Config::<f64> {
-        h: dt,
-        ymin: 0.0,
-        ymax: 10.0,
-        c: 0.0,
-        ..Config::default()
-    };
-    tuning.apply(&mut pid_config).map_err(|e| e.to_string())?;
-    let mut pid: Pid<f64> = relay
-        .hand_over(&pid_config, setpoint, plant.x)
-        .map_err(|e| e.to_string())?;
-    let mut last_u = relay.output();
-    let mut jump: f64 = 0.0;
-    let after = start + experiment_s;
-    let run_for = match kind {
-        ProcessKind::Room => 8.0 * 3600.0,
-        ProcessKind::Tank => 600.0,
-    };
-    let step_at = after + run_for / 8.0;
-    let (mut peak, mut settled_at): (f64, Option<f64>) = (f64::NEG_INFINITY, None);
-    while t < after + run_for {
-        let r = if t >= step_at {
-            setpoint + step
-        } else {
-            setpoint
-        };
-        let y = plant.x;
-        let u = pid.update(r, y);
-        if t < after + 10.0 * dt {
-            jump = jump.max((u - last_u).abs());
-        }
-        last_u = u;
-        if t >= step_at {
-            peak = peak.max(y);
-            let inside = (y - (setpoint + step)).abs() <= 0.05 * step;
-            settled_at = match (settled_at, inside) {
-                (None, true) => Some(t - step_at),
-                (Some(s), true) => Some(s),
-                (_, false) => None,
-            };
-        }
-        record(t - start, r, y, u, false, &mut trace);
-        plant.step(t, u);
-        t += dt;
-    }
-    Ok(AutotuneReport {
-        process: kind,
-        bias_v: bias,
-        relay_v: amplitude,
-        hysteresis,
-        ultimate,
-        experiment_s,
-        k: tuning.k,
-        ti: tuning.ti,
-        step,
-        handover_jump_v: jump,
-        overshoot_pct: 100.0 * ((peak - setpoint - step) / step).max(0.0),
-        settling_s: settled_at,
-        trace,
-    })
-}
-
-/// Checks the configuration and the script against what a plant can have.
-fn validate(config: &SimConfig) -> Result<(), String> {
     if let Some(gt) = config.three_point_s {
         if !(gt.is_finite() && (5.0..=3600.0).contains(&gt)) {
-            return Err(format!("three-point run time must be 5..=3600 s, got {gt}"));
+            return Err(out_of(
+                "--three-point",
+                5.0,
+                3600.0,
+                " s (the run time)",
+                gt,
+            ));
         }
     }
     if !(config.hours.is_finite() && config.hours > 0.0 && config.hours <= 24.0 * 365.0) {
         return Err(format!(
-            "hours must be more than 0 and at most 8760 (a year), got {}",
-            config.hours
+            "--hours: must be more than 0 and at most 8760 (a year), got {}",
+            number(config.hours)
         ));
     }
     let (scale_lo, scale_hi) = config.process.scale();
     let span = scale_hi - scale_lo;
     if !(config.night_setback.is_finite() && (0.0..=span).contains(&config.night_setback)) {
-        return Err(format!(
-            "night-setback must be between 0 and the scale's span ({span}), got {}",
-            config.night_setback
+        return Err(out_of(
+            "--night-setback",
+            0.0,
+            span,
+            " (the scale's span)",
+            config.night_setback,
         ));
     }
     if !(config.outdoor_mean.is_finite() && (-50.0..=50.0).contains(&config.outdoor_mean)) {
-        return Err(format!(
-            "outdoor-mean must be between -50 and 50 °C (a climate a building is heated in), got {}",
-            config.outdoor_mean
+        return Err(out_of(
+            "--outdoor-mean",
+            -50.0,
+            50.0,
+            " °C (a climate a building is heated in)",
+            config.outdoor_mean,
         ));
     }
     if !(config.trace_every_s.is_finite() && config.trace_every_s > 0.0) {
         return Err(format!(
-            "trace-every must be more than 0 seconds, got {}",
-            config.trace_every_s
+            "--trace-every: must be more than 0 seconds, got {}",
+            number(config.trace_every_s)
         ));
     }
     for event in &config.script {
         if let Input::Outdoor(delta) = event.input {
             if delta.abs() > span {
                 return Err(format!(
-                    "an outdoor step must be within ±{span} (the scale's span), got {delta}"
+                    "script line {}: an outdoor step must be within ±{} (the scale's span), got {}",
+                    event.line,
+                    number(span),
+                    number(delta)
                 ));
             }
         }
@@ -733,76 +298,7 @@ pub struct Sim {
     motor: Option<Motor>,
     /// Lines the operator saw.
     pub shown: Vec<Shown>,
-}
-
-/// A three-point actuator: the driver (with its position estimate) and the real motor.
-struct Motor {
-    driver: regler_pid::actuator::ThreePoint<f64>,
-    gt: f64,
-    h: f64,
-    /// Where the motor really is, 0..1.
-    position: f64,
-    /// Seconds of the current pulse still to run, and its direction.
-    pulse_left: f64,
-    opening: bool,
-    /// The controller output at the last sample (V).
-    last_u: f64,
-}
-
-impl Motor {
-    fn new(gt: f64, h: f64, position: f64) -> Result<Motor, String> {
-        use regler_pid::actuator::{ActuatorConfig, ThreePoint};
-        let config = ActuatorConfig {
-            run_time: gt,
-            min_pulse: 0.2f64.min(h),
-            dead_band: 0.005,
-            h,
-        };
-        let driver = ThreePoint::new(config, position).map_err(|e| e.to_string())?;
-        Ok(Motor {
-            driver,
-            gt,
-            h,
-            position,
-            pulse_left: 0.0,
-            opening: false,
-            last_u: 10.0 * position,
-        })
-    }
-
-    /// A new sample: the controller's output changed by `delta_volts` (10 V = the full stroke).
-    fn command(&mut self, delta_volts: f64, h: f64) {
-        use regler_pid::actuator::Drive;
-        if (h - self.h).abs() > 1e-9 {
-            // The operator changed the sample period: the longest pulse changes with it.
-            if let Ok(m) = Motor::new(self.gt, h, self.driver.position()) {
-                let (position, last_u) = (self.position, self.last_u);
-                *self = m;
-                (self.position, self.last_u) = (position, last_u);
-            }
-        }
-        match self.driver.update_delta(delta_volts / 10.0) {
-            Ok(Drive::Open(s)) => (self.pulse_left, self.opening) = (s, true),
-            Ok(Drive::Close(s)) => (self.pulse_left, self.opening) = (s, false),
-            _ => self.pulse_left = 0.0,
-        }
-    }
-
-    /// The motor runs for `dt` seconds (or what is left of the pulse); returns its output in
-    /// volts-equivalent (10 V = fully open).
-    fn run(&mut self, dt: f64) -> f64 {
-        let m = dt.min(self.pulse_left);
-        if m > 0.0 {
-            let moved = m / self.gt;
-            self.position = if self.opening {
-                (self.position + moved).min(1.0)
-            } else {
-                (self.position - moved).max(0.0)
-            };
-            self.pulse_left -= m;
-        }
-        10.0 * self.position
-    }
+    refused: Vec<Refusal>,
 }
 
 impl Sim {
@@ -837,6 +333,7 @@ impl Sim {
                 None => None,
             },
             shown: Vec::new(),
+            refused: Vec::new(),
         })
     }
 
@@ -848,11 +345,18 @@ impl Sim {
 
     /// Applies an operator's input now; returns how many lines it added to [`shown`](Sim::shown).
     pub fn input(&mut self, input: &Input) -> usize {
-        let before = self.shown.len();
         let event = Event {
             t_s: self.now(),
+            line: 0,
             input: input.clone(),
         };
+        self.event(&event)
+    }
+
+    /// Applies a script's event now (a refused `term` line is noted with its script line);
+    /// returns how many lines it added to [`shown`](Sim::shown).
+    pub fn event(&mut self, event: &Event) -> usize {
+        let before = self.shown.len();
         apply(
             &event,
             &mut self.station,
@@ -861,6 +365,23 @@ impl Sim {
             &mut self.plant,
             &mut self.shown,
         );
+        if let (Input::Term(line), true) = (&event.input, event.line > 0) {
+            let reply: Vec<&str> = self.shown[before..]
+                .iter()
+                .map(|s| s.text.as_str())
+                .filter(|t| !t.starts_with("> ") && !t.ends_with("?>"))
+                .collect();
+            if reply
+                .iter()
+                .any(|t| t.contains("WRONG") || t.contains("TRY AGAIN"))
+            {
+                self.refused.push(Refusal {
+                    line: event.line,
+                    input: line.clone(),
+                    reply: reply.join(" / ").trim().to_owned(),
+                });
+            }
+        }
         self.shown.len() - before
     }
 
@@ -954,19 +475,23 @@ impl Sim {
             picture: self.picture.clone(),
             shown: self.shown.clone(),
             final_lcd: self.lcd(),
+            simulated_h: self.now() / 3600.0,
+            refused: self.refused.clone(),
         }
     }
 }
 
 /// Runs the simulation of `config` with its script; `trace` gets a point every
-/// `config.trace_every_s` as it is computed (memory stays flat in the length of the run).
+/// `config.trace_every_s` as it is computed (memory stays flat in the length of the run). When
+/// `trace` breaks (its reader has gone), the run ends there and reports what it simulated.
 pub fn run(
     config: &SimConfig,
     mut progress: impl FnMut(f64),
-    mut trace: impl FnMut(&TracePoint),
+    mut trace: impl FnMut(&TracePoint) -> ControlFlow<()>,
 ) -> Result<SimReport, String> {
     validate(config)?;
     let mut shown: Vec<Shown> = Vec::new();
+    let mut refused: Vec<Refusal> = Vec::new();
     let mut events = config.script.iter().peekable();
     let mut terminal = Terminal::new();
     let startup = match config.interface {
@@ -994,7 +519,25 @@ pub fn run(
                     t_s: event.t_s,
                     text: format!("> {line}"),
                 });
+                let asked = terminal.question();
                 let (out, result) = terminal.startup_line(line);
+                if result.is_none() && terminal.question() == asked {
+                    // The question is asked again: the script's next `term` line answers it.
+                    let reply: Vec<&str> = out
+                        .iter()
+                        .map(String::as_str)
+                        .filter(|t| !t.ends_with("?>") && !t.ends_with('!'))
+                        .collect();
+                    refused.push(Refusal {
+                        line: event.line,
+                        input: line.clone(),
+                        reply: if reply.is_empty() {
+                            "asked again".into()
+                        } else {
+                            format!("{} (asked again)", reply.join(" / ").trim())
+                        },
+                    });
+                }
                 shown.extend(out.into_iter().map(|text| Shown {
                     t_s: event.t_s,
                     text,
@@ -1006,14 +549,19 @@ pub fn run(
     };
     let mut sim = Sim::new(config, startup, terminal)?;
     sim.shown = shown;
+    sim.refused = refused;
     let end = config.hours * 3600.0;
     let steps = (end / sim.dt).round() as u64;
     for step in 0..=steps {
         let t = sim.now();
         while let Some(event) = events.next_if(|e| e.t_s <= t) {
-            sim.input(&event.input);
+            sim.event(event);
         }
-        sim.advance(&mut trace);
+        let mut stop = false;
+        sim.advance(&mut |p| stop |= trace(p).is_break());
+        if stop {
+            return Ok(sim.report(config));
+        }
         if step % 100_000 == 0 {
             progress(step as f64 / steps.max(1) as f64);
         }
@@ -1089,23 +637,7 @@ fn apply(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn script_times_and_errors() {
-        let events =
-            parse_script("# c\n90s term PI\n2h keys * 21 *\n22:30 night on\n10m outdoor -3\n")
-                .unwrap();
-        let times: Vec<f64> = events.iter().map(|e| e.t_s).collect();
-        assert_eq!(times, [90.0, 600.0, 7200.0, 81_000.0]);
-        assert!(parse_script("x term").unwrap_err().contains("line 1"));
-        assert!(
-            parse_script("0 dance")
-                .unwrap_err()
-                .contains("unknown command")
-        );
-        assert!(parse_script("0 night maybe").is_err());
-        assert!(parse_script("10:75 night on").is_err());
-    }
+    use crate::autonomous::script::parse_script;
 
     #[test]
     fn unfinished_startup_is_an_error() {
@@ -1122,7 +654,7 @@ mod tests {
             script: parse_script("0 term PID\n0 keys *").unwrap(),
         };
         assert!(
-            run(&config, |_| {}, |_| {})
+            run(&config, |_| {}, |_| ControlFlow::Continue(()))
                 .unwrap_err()
                 .contains("start-up dialogue is not finished")
         );
