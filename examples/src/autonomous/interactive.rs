@@ -178,6 +178,12 @@ pub fn run<'a>(
         }
         !closed
     };
+    // The first sample, so the status line shows the plant as it is, not the controller's
+    // zeros before it has measured anything.
+    let first_sample = sim.now() + 1e-9;
+    if !advance(&mut sim, first_sample, &mut trace) {
+        return Ok((sim.report(config), trace));
+    }
     screen.say(&[format!("[{}] {}", clock(sim.now()), sim.status())])?;
     while sim.now() < end {
         // The plant runs at `speed` times real time, plus what `run S` skipped.

@@ -66,20 +66,23 @@ pub fn run(r: &SimReport) -> String {
     };
     let markers: Vec<f64> = r.commits_s.iter().map(|t| t / scale).collect();
     let started = match c.interface {
-        Interface::Terminal => "set up at the terminal",
-        Interface::Keypad => "set up on the keypad",
+        Interface::Terminal => "terminal",
+        Interface::Keypad => "keypad",
     };
     let actuator = match c.three_point_s {
-        Some(gt) => format!("three-point motor, {} s stroke", crate::cli::number(gt)),
+        Some(gt) => format!("three-point motor {} s", crate::cli::number(gt)),
         None => "0–10 V output".into(),
     };
-    let what = format!(
-        "{}, {started}, {actuator}, seed {}",
-        c.process.name(),
+    let (process, measured) = match c.process {
+        ProcessKind::Room => ("Room", "temperature"),
+        ProcessKind::Tank => ("Tank", "level"),
+    };
+    let title = format!(
+        "{process}: set-point and {measured} ({started} set-up, {actuator}, seed {})",
         c.seed
     );
     let mut charts = vec![svg::line_chart_fitted(
-        &format!("Set-point and measurement: {what}"),
+        &title,
         unit,
         quantity(c.process),
         &[
