@@ -122,7 +122,7 @@ impl std::fmt::Display for Refusal {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "script line {}: the controller refused `{}`: {}",
+            "script line {}: the controller refused '{}': {}",
             self.line, self.input, self.reply
         )
     }
@@ -358,7 +358,7 @@ impl Sim {
     pub fn event(&mut self, event: &Event) -> usize {
         let before = self.shown.len();
         apply(
-            &event,
+            event,
             &mut self.station,
             &mut self.terminal,
             &mut self.keypad,
