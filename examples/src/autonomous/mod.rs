@@ -1,5 +1,5 @@
 //! The 1985 autonomous PID controller (source 002) on a simulated process, run in simulated
-//! time on `regler-pid`'s [`Station`], operated through the source's terminal dialogue or its
+//! time on `regler-pid`'s [`Station`](regler_pid::Station), operated through the source's terminal dialogue or its
 //! keypad and LCD.
 //!
 //! # Processes
@@ -42,7 +42,7 @@
 //! - [`terminal`], [`keypad`]: the operator interfaces of the source;
 //! - [`controller`]: `Station` on the plant, the script's run and its measures;
 //! - [`interactive`]: the controller at a live terminal;
-//! - [`autotune`], [`benchmark`]: relay auto-tuning on the room or tank, and the tuning rules
+//! - [`autotune`](mod@autotune), [`benchmark`]: relay auto-tuning on the room or tank, and the tuning rules
 //!   judged on Åström and Hägglund's benchmark processes;
 //! - [`summary`], [`json`], [`picture`]: the presentation — the text summary, the streamed
 //!   JSON, the SVG.

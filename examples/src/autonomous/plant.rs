@@ -1,7 +1,7 @@
 //! The simulated processes: the heated room and the tank (what the controller measures and
 //! drives), and the three-point actuator's motor between the controller and the process.
 //!
-//! The plant integrates in fixed steps ([`ProcessKind::dt`]: 1 s for the room, 0.1 s for the
+//! The plant integrates in fixed steps (1 s for the room, 0.1 s for the
 //! tank); the controller samples it every S seconds (see [`super::controller`]).
 
 use rand::{Rng, SeedableRng};
