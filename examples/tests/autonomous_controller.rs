@@ -590,8 +590,30 @@ fn a_refused_script_answer_is_named() {
 fn a_closed_pipe_ends_quietly() {
     use std::io::Read;
     let interactive_input = format!("{TANK_ANSWERS}{}quit\n", "\n".repeat(20_000));
+    // The text summary is short: a transcript of 4 000 status requests makes it long.
+    let answers: String = TANK_ANSWERS
+        .lines()
+        .map(|a| format!("0 term {a}\n"))
+        .collect();
+    let chatty = temp_file(
+        "chatty.txt",
+        &format!("{answers}{}", "1m term\n".repeat(4000)),
+    );
     let cases: Vec<(Vec<&str>, Option<&str>)> = vec![
         (vec!["--no-svg"], None),
+        (
+            vec![
+                "--process",
+                "tank",
+                "--hours",
+                "0.1",
+                "--no-svg",
+                "-q",
+                "--script",
+                chatty.to_str().unwrap(),
+            ],
+            None,
+        ),
         (
             vec![
                 "--interface",
