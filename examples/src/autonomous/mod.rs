@@ -40,7 +40,8 @@
 //! - [`plant`]: the room, the tank and the three-point motor;
 //! - [`script`]: the timed operator input and the built-in demonstrations;
 //! - [`terminal`], [`keypad`]: the operator interfaces of the source;
-//! - [`controller`]: `Station` on the plant, the script's run and its measures;
+//! - [`controller`]: `Station` on the plant, and the script's run;
+//! - [`report`]: what a run gives, and the loop's measures;
 //! - [`interactive`]: the controller at a live terminal;
 //! - [`autotune`](mod@autotune), [`benchmark`]: relay auto-tuning on the room or tank, and the tuning rules
 //!   judged on Åström and Hägglund's benchmark processes;
@@ -55,6 +56,7 @@ pub mod json;
 pub mod keypad;
 pub mod picture;
 pub mod plant;
+pub mod report;
 pub mod script;
 pub mod summary;
 pub mod terminal;
@@ -62,9 +64,8 @@ pub mod terminal;
 use serde::Serialize;
 
 pub use self::autotune::{AutotunePoint, AutotuneReport, autotune};
-pub use self::controller::{
-    Refusal, Shown, Sim, SimConfig, SimReport, TracePoint, keypad_startup, run,
-};
+pub use self::controller::{Sim, keypad_startup, run, validate};
+pub use self::report::{Refusal, Shown, SimConfig, SimReport, TracePoint};
 pub use self::script::{Event, Input, demo_script, parse_script};
 
 /// The simulated process.
