@@ -169,10 +169,30 @@ pub struct Found {
     pub ultimate: Option<(f64, f64)>,
     /// The analytic ultimate point where it has one.
     pub ultimate_true: Option<(f64, f64)>,
-    /// FOPDT (K, T, L) from the step, or why not.
+    /// FOPDT (K, T, L) from the step, or why not; in JSON `{"k": …, "t": …, "l": …}` or
+    /// `{"none": "why"}`.
+    #[serde(serialize_with = "fopdt_json")]
     pub fopdt: Result<(f64, f64, f64), String>,
     /// The tunings judged.
     pub rows: Vec<Row>,
+}
+
+/// The step model as a plain JSON object, never Rust's `{"Ok": …}`.
+fn fopdt_json<S: serde::Serializer>(
+    fopdt: &Result<(f64, f64, f64), String>,
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap;
+    let mut map = s.serialize_map(None)?;
+    match fopdt {
+        Ok((k, t, l)) => {
+            map.serialize_entry("k", k)?;
+            map.serialize_entry("t", t)?;
+            map.serialize_entry("l", l)?;
+        }
+        Err(why) => map.serialize_entry("none", why)?,
+    }
+    map.end()
 }
 
 fn relay(kind: Benchmark) -> Option<Ultimate> {

@@ -170,6 +170,15 @@ impl Terminal {
         vec!["INITIALITION MODE".into(), Question::Type.prompt().into()]
     }
 
+    /// The start-up question on screen (`None` once the controller runs).
+    #[must_use]
+    pub fn question(&self) -> Option<Question> {
+        match self {
+            Terminal::Startup { question, .. } => Some(*question),
+            _ => None,
+        }
+    }
+
     /// One line typed during start-up. Returns the printed lines, and the start-up result once
     /// the operator pressed CR at the end.
     pub fn startup_line(&mut self, line: &str) -> (Vec<String>, Option<Startup>) {
