@@ -31,7 +31,8 @@
 //!
 //! # The controller
 //! *Without voting* it decodes the first scan, as the source did; *with voting* a
-//! [`Voter`] combines all scans. Either way the [`Registry`] routes the trolley: delivered if
+//! [`Voter`] combines all scans. Either way the
+//! [`Registry`](regler_trolley_id::Registry) routes the trolley: delivered if
 //! the number read has a destination on this dock, else rejected (to the manual station).
 //! *With correction* every accepted DIA recalibrates the tracker; *without* the distances stay
 //! as commissioned.

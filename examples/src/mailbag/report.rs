@@ -139,7 +139,7 @@ pub struct StretchReport {
 pub struct Report {
     /// The parameters.
     pub config: Config,
-    /// One per scenario, in [`SCENARIOS`] order.
+    /// One per scenario, in [`SCENARIOS`](super::SCENARIOS) order.
     pub scenarios: Vec<ScenarioReport>,
     /// One per reader.
     pub readers: Vec<ReaderReport>,
