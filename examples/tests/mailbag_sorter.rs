@@ -108,29 +108,202 @@ fn human_summary_and_svg_picture() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Every refused argument: exit code 2, a message that names the option the user typed (and
+/// for a range its bounds), no panic, no Rust debug text, nothing on stdout.
 #[test]
-fn bad_input_is_a_clear_message_not_a_panic() {
-    for (args, needle) in [
-        (&["--years", "-1"][..], "years"),
-        (&["--docks", "0"][..], "docks"),
-        (&["--misread-rate", "NaN"][..], "misread-rate"),
-        (&["--bins", "500"][..], "bins"),
+fn bad_input_is_refused_naming_the_option() {
+    for (args, needles) in [
         (
-            &["--vote-k", "0"][..],
-            "vote-k must be between 1 and readings (5), got 0",
+            &["--years", "-1"][..],
+            &["--years", "from 0.01 to 50", "got -1"][..],
+        ),
+        (&["--years", "1e300"], &["--years", "got 1e300"]),
+        (&["--docks", "0"], &["--docks", "from 1 to 8", "got 0"]),
+        (
+            &["--docks", "many"],
+            &["--docks", "whole number", "got many"],
+        ),
+        (&["--misread-rate", "NaN"], &["--misread-rate", "finite"]),
+        (
+            &["--misread-rate", "0.3"],
+            &["--misread-rate", "from 0 to 0.25"],
+        ),
+        (&["--bins", "500"], &["--bins", "from 2 to 64", "got 500"]),
+        (
+            &["--chain-m", "20"],
+            &["--chain-m", "from 50 to 2000", "got 20"],
         ),
         (
-            &["--vote-k", "6"][..],
-            "vote-k must be between 1 and readings (5), got 6",
+            &["--trolleys-per-year", "0"],
+            &["--trolleys-per-year", "from 1 to 1000000"],
         ),
-        (&["--docks", "many"][..], "invalid value"),
+        (
+            &["--reader-spread", "2"],
+            &["--reader-spread", "from 0 to 1"],
+        ),
+        (
+            &["--glitch-rate", "-0.1"],
+            &["--glitch-rate", "from 0 to 1"],
+        ),
+        (&["--readings", "0"], &["--readings", "from 1 to 50"]),
+        (
+            &["--reader-alarm-per-mille", "5000"],
+            &["--reader-alarm-per-mille", "from 0 to 1000", "got 5000"],
+        ),
+        (&["--vote-k", "0"], &["--vote-k", "from 1 to 50", "got 0"]),
+        (&["--vote-k", "6"], &["--vote-k", "--readings (5)", "got 6"]),
+        (
+            &["--stretch-m-per-year", "30"],
+            &["--stretch-m-per-year", "--chain-m", "got 30"],
+        ),
+        (
+            &["--strategy", "best"],
+            &["--strategy", "majority", "consecutive"],
+        ),
+        (
+            &["--no-svg", "--svg", "x.svg"],
+            &["--no-picture", "--picture"],
+        ),
+        (
+            &["--svg", "/nonexistent/dir/m.svg"],
+            &["cannot write /nonexistent/dir/m.svg", "No such file"],
+        ),
     ] {
-        let out = sorter(&[args, &["--no-svg", "-q"]].concat());
-        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        // A short run where the row does not set the years itself.
+        let short: &[&str] = if args.contains(&"--years") {
+            &["-q"]
+        } else {
+            &["-q", "--years", "0.01"]
+        };
+        let out = sorter(&[args, short].concat());
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.contains(needle), "{args:?}: {err}");
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        for needle in needles {
+            assert!(err.contains(needle), "{args:?}: no {needle:?} in {err}");
+        }
         assert!(!err.contains("panicked"), "{err}");
+        assert_no_debug_text(&err);
+        assert!(out.stdout.is_empty(), "{args:?}");
     }
+}
+
+/// A chain shorter than the 300 m between the reference initiators runs (the initiators sit at
+/// ¾ of it) instead of blaming an option that does not exist.
+#[test]
+fn a_short_chain_runs() {
+    let out = sorter(&[
+        "--chain-m",
+        "200",
+        "--years",
+        "0.05",
+        "-q",
+        "--no-svg",
+        "--json",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("initiator"), "{err}");
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(r["config"]["initiator_span_m"].as_f64(), Some(150.0));
+    assert!(
+        r["scenarios"][3]["tip_error"]["mean_abs_m"]
+            .as_f64()
+            .unwrap()
+            < 0.1,
+        "{r}"
+    );
+}
+
+/// What a user reads never shows Rust's debug formatting.
+fn assert_no_debug_text(text: &str) {
+    for bad in [
+        "Some(",
+        "None",
+        "Ok(",
+        "Err(",
+        "\"Ok\":",
+        "Custom {",
+        " { ",
+        "Majority",
+        "Consecutive",
+        "0e0",
+    ] {
+        assert!(!text.contains(bad), "debug text {bad:?} in: {text}");
+    }
+}
+
+#[test]
+fn no_debug_text_reaches_the_user() {
+    let dir = std::env::temp_dir().join(format!("regler-mailbag-dbg-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let svg = dir.join("m.svg");
+    for strategy in ["majority", "consecutive"] {
+        let args = [
+            "--years",
+            "0.05",
+            "--strategy",
+            strategy,
+            "--misread-rate",
+            "0",
+            "-q",
+            "--svg",
+            svg.to_str().unwrap(),
+        ];
+        let out = sorter(&args);
+        assert!(out.status.success());
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert_no_debug_text(&text);
+        assert_no_debug_text(&std::fs::read_to_string(&svg).unwrap());
+        let out = sorter(&[&args[..], &["--json"]].concat());
+        assert_no_debug_text(&String::from_utf8(out.stdout).unwrap());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `| head -1` in every output mode (`mailbag-sorter --json --no-svg -q | head -1` panicked
+/// about one run in three): the program ends quietly, exit 0 and nothing on stderr, whether the
+/// reader closes before the first write (the write fails at once, every time) or after the first
+/// line.
+#[test]
+fn a_closed_pipe_ends_quietly() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let dir = std::env::temp_dir().join(format!("regler-mailbag-pipe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let svg = dir.join("m.svg");
+    let svg = svg.to_str().unwrap();
+    for mode in [
+        &["--no-svg"][..],
+        &["--svg", svg],
+        &["--json", "--no-svg"],
+        &["--json", "--svg", svg],
+    ] {
+        for read_a_line in [false, true] {
+            let mut child = Command::new(env!("CARGO_BIN_EXE_mailbag-sorter"))
+                .args([&["--years", "0.05", "-q"], mode].concat())
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap();
+            let stdout = child.stdout.take().unwrap();
+            if read_a_line {
+                let mut line = String::new();
+                BufReader::new(stdout).read_line(&mut line).unwrap();
+                assert!(!line.is_empty(), "{mode:?}");
+            } else {
+                drop(stdout);
+            }
+            let out = child.wait_with_output().unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(
+                out.status.success(),
+                "{mode:?} {read_a_line}: {:?} {err}",
+                out.status
+            );
+            assert!(err.is_empty(), "{mode:?} {read_a_line}: {err}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]

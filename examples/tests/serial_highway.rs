@@ -104,21 +104,243 @@ fn human_summary_and_picture() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Every refused argument: exit code 2, a message that names the option (and for a range its
+/// bounds), no panic, no Rust debug text.
 #[test]
-fn bad_arguments_are_errors_not_panics() {
-    for args in [
-        &["--crates", "0"][..],
-        &["--crates", "63"],
-        &["--ber", "0.7"],
-        &["--window", "0"],
-        &["--messages", "0"],
+fn bad_arguments_are_refused_naming_the_option() {
+    for (args, needles) in [
+        (
+            &["--crates", "0"][..],
+            &["--crates", "from 1 to 62", "got 0"][..],
+        ),
+        (&["--crates", "63"], &["--crates", "from 1 to 62"]),
+        (&["--crates", "-3"], &["--crates", "from 1 to 62", "got -3"]),
+        (&["--ber", "0.7"], &["--ber", "from 0 to 0.1", "got 0.7"]),
+        (&["--ber", "-1"], &["--ber", "from 0 to 0.1", "got -1"]),
+        (&["--ber", "nan"], &["--ber", "finite"]),
+        (&["--window", "0"], &["--window", "from 1 to 16"]),
+        (&["--window", "17"], &["--window", "from 1 to 16"]),
+        (&["--messages", "0"], &["--messages", "from 1 to 100000000"]),
+        (
+            &["--messages", "99999999999999"],
+            &["--messages", "from 1 to 100000000", "got 99999999999999"],
+        ),
+        (
+            &["--bit-rate", "1e300"],
+            &["--bit-rate", "from 1000 to 100000000", "got 1e300"],
+        ),
+        (&["--bit-rate", "0"], &["--bit-rate", "from 1000"]),
+        (&["--retries", "-1"], &["--retries", "from 0 to 255"]),
+        // One command in flight per crate: a window above the crate count is refused.
+        (
+            &["--crates", "5", "--window", "16"],
+            &["--window", "--crates (5)", "got 16"],
+        ),
+        // Options the ports mode would ignore are refused, each named.
+        (
+            &[
+                "--ports",
+                "/nonexistent/a",
+                "/nonexistent/b",
+                "--ber",
+                "0.01",
+                "--svg",
+                "x.svg",
+            ],
+            &["--ports", "--ber", "--picture"],
+        ),
+        (
+            &[
+                "--ports",
+                "/nonexistent/a",
+                "/nonexistent/b",
+                "--crates",
+                "5",
+            ],
+            &["--ports", "--crates"],
+        ),
+        (
+            &[
+                "--ports",
+                "/nonexistent/a",
+                "/nonexistent/b",
+                "--panel",
+                "--messages",
+                "5",
+            ],
+            &["--panel", "--messages"],
+        ),
+        (&["--panel"], &["--panel", "--ports"]),
+        (
+            &["--no-svg", "--svg", "x.svg"],
+            &["--no-picture", "--picture"],
+        ),
+        (
+            &["--line", "serial"],
+            &["--line", "byte-serial", "bit-serial"],
+        ),
+        (
+            &["--script", "/nonexistent/work.txt"],
+            &["--script", "/nonexistent/work.txt", "No such file"],
+        ),
+        (
+            &["--ports", "/nonexistent/a", "/nonexistent/b"],
+            &["cannot open /nonexistent/"],
+        ),
     ] {
-        let out = highway(args);
-        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let out = highway(&[args, &["-q"]].concat());
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.starts_with("serial-highway: "), "{err}");
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        for needle in needles {
+            assert!(err.contains(needle), "{args:?}: no {needle:?} in {err}");
+        }
         assert!(!err.contains("panicked"), "{err}");
+        assert_no_debug_text(&err);
+        assert!(out.stdout.is_empty(), "{args:?}");
     }
+}
+
+/// What a user reads never shows Rust's debug formatting: no `(ByteSerial)`, no `Some(`, no
+/// `{ field: … }`, and numbers as a user writes them (`0`, `1e-5`, not `0e0`).
+fn assert_no_debug_text(text: &str) {
+    for bad in [
+        "Some(",
+        "None",
+        "Ok(",
+        "Err(",
+        "\"Ok\":",
+        "Custom {",
+        " { ",
+        "ByteSerial",
+        "BitSerial",
+        "e0 ",
+        "0e0",
+    ] {
+        assert!(!text.contains(bad), "debug text {bad:?} in: {text}");
+    }
+}
+
+#[test]
+fn no_debug_text_reaches_the_user() {
+    for line in ["byte-serial", "bit-serial"] {
+        for ber in ["0", "1e-5", "0.001"] {
+            let out = highway(&[
+                "--messages",
+                "300",
+                "--crates",
+                "4",
+                "--line",
+                line,
+                "--ber",
+                ber,
+                "-q",
+                "--no-svg",
+            ]);
+            assert!(out.status.success());
+            let text = String::from_utf8(out.stdout).unwrap();
+            assert!(
+                text.contains(&format!("bit-error rate {ber} per link ({line})")),
+                "{text}"
+            );
+            assert_no_debug_text(&text);
+            let json = String::from_utf8(
+                highway(&[
+                    "--messages",
+                    "300",
+                    "--crates",
+                    "4",
+                    "--line",
+                    line,
+                    "--ber",
+                    ber,
+                    "--json",
+                    "--no-svg",
+                ])
+                .stdout,
+            )
+            .unwrap();
+            assert!(json.contains(&format!("\"line\": \"{line}\"")), "{json}");
+            assert_no_debug_text(&json);
+        }
+    }
+}
+
+/// `| head -1` in every output mode: the program ends quietly, exit 0 and nothing on stderr,
+/// whether the reader closes before the first write (the write fails at once, every time) or
+/// after the first line.
+#[test]
+fn a_closed_pipe_ends_quietly() {
+    use std::io::{BufRead, BufReader};
+    let dir = std::env::temp_dir().join(format!("regler-sh-pipe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let svg = dir.join("h.svg");
+    let svg = svg.to_str().unwrap();
+    for mode in [
+        &["--no-svg"][..],
+        &["--svg", svg],
+        &["--json", "--no-svg"],
+        &["--json", "--svg", svg],
+    ] {
+        for read_a_line in [false, true] {
+            let mut child = Command::new(env!("CARGO_BIN_EXE_serial-highway"))
+                .args([&["--messages", "2000", "--crates", "12"], mode].concat())
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap();
+            let stdout = child.stdout.take().unwrap();
+            if read_a_line {
+                let mut line = String::new();
+                BufReader::new(stdout).read_line(&mut line).unwrap();
+                assert!(!line.is_empty(), "{mode:?}");
+            } else {
+                drop(stdout);
+            }
+            let out = child.wait_with_output().unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(
+                out.status.success(),
+                "{mode:?} {read_a_line}: {:?} {err}",
+                out.status
+            );
+            assert!(err.is_empty(), "{mode:?} {read_a_line}: {err}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_window_follows_a_small_loop_and_the_picture_says_what_ran() {
+    let r = json(&["--messages", "500", "--crates", "5"]);
+    assert_eq!(r["config"]["window"], 5, "{r}");
+    assert_eq!(json(&["--messages", "500"])["config"]["window"], 16);
+    let dir = std::env::temp_dir().join(format!("regler-sh-pic-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let svg = dir.join("h.svg");
+    let out = highway(&[
+        "--messages",
+        "3000",
+        "--crates",
+        "6",
+        "--ber",
+        "2e-3",
+        "--retries",
+        "1",
+        "--line",
+        "bit-serial",
+        "-q",
+        "--svg",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    let picture = std::fs::read_to_string(&svg).unwrap();
+    assert!(
+        picture.contains("bit-serial, 6 crates, BER 0.002"),
+        "{picture}"
+    );
+    assert!(picture.contains("failed after every retry"), "{picture}");
+    assert!(picture.contains(" failed, 0 undetected"), "{picture}");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Runs the example over a fresh `socat` pty pair with `args`; `None` when socat is missing.

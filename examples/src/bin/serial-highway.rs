@@ -1,15 +1,15 @@
 //! `serial-highway`: the CAMAC serial highway (source 004) rebuilt on `regler-panel-link` — a
 //! driver and up to 62 L-type crate controllers on a noisy loop, or a driver and one crate over
-//! two real serial ports.
+//! two real serial ports. The highway itself is `regler_examples::highway`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, ValueEnum};
-use indicatif::{ProgressBar, ProgressStyle};
 use regler_examples::cli::{self, Common, Program, Stop};
-use regler_examples::highway::{self, Config, LineKind, Sim, Summary};
-use regler_examples::svg;
+use regler_examples::highway::{
+    self, Config, LineKind, MAX_BER, MAX_CRATES, MAX_MESSAGES, MAX_RATE, MIN_RATE, WINDOW,
+};
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum Line {
@@ -28,39 +28,48 @@ enum Line {
 #[derive(Debug, Parser)]
 #[command(name = "serial-highway", version)]
 struct Args {
-    /// Crate controllers on the loop (1–62).
-    #[arg(long, default_value_t = 62)]
+    /// Crate controllers on the loop (1 to 62).
+    #[arg(long, default_value_t = 62, allow_hyphen_values = true,
+          value_parser = cli::whole(1, MAX_CRATES))]
     crates: u8,
-    /// Commands to run to completion (or failure).
-    #[arg(long, default_value_t = 1_000_000)]
+    /// Commands to run to completion or failure (1 to 100000000).
+    #[arg(long, default_value_t = 1_000_000, allow_hyphen_values = true,
+          value_parser = cli::whole(1, MAX_MESSAGES))]
     messages: u64,
-    /// Bit-error rate of every link.
-    #[arg(long, default_value_t = 1e-5)]
+    /// Bit-error rate of every link (0 to 0.1).
+    #[arg(long, default_value_t = 1e-5, allow_hyphen_values = true,
+          value_parser = cli::real(0.0, MAX_BER))]
     ber: f64,
     /// Line encoding the noise acts on.
     #[arg(long, value_enum, default_value_t = Line::ByteSerial)]
     line: Line,
-    /// Commands in flight at most (1–16, one per crate).
-    #[arg(long, default_value_t = 16)]
-    window: usize,
-    /// Retries per command (each waits for the attempt's deadline: the highway has no sequence
-    /// numbers, so nothing may be resent while a copy could still be on the loop).
-    #[arg(long, default_value_t = 5)]
+    /// Commands in flight at most: one per crate, so 1 to 16 and at most --crates [default: 16,
+    /// or --crates when fewer]
+    #[arg(long, allow_hyphen_values = true, value_parser = cli::whole(1, WINDOW))]
+    window: Option<usize>,
+    /// Retries per command, 0 to 255 (each waits for the attempt's deadline: the highway has no
+    /// sequence numbers, so nothing may be resent while a copy could still be on the loop).
+    #[arg(long, default_value_t = 5, allow_hyphen_values = true,
+          value_parser = cli::whole(0, u8::MAX))]
     retries: u8,
     /// A scripted workload instead of the random one: lines `CRATE STATION SUBADDRESS FUNCTION
     /// [DATA]` (e.g. `5 1 0 16 0x1234` writes, `5 1 0 0` reads back), run in order, over and over.
     #[arg(long)]
     script: Option<PathBuf>,
-    /// Bit-serial bit rate (bit/s) for the throughput figure.
-    #[arg(long, default_value_t = 5e6)]
+    /// Bit-serial bit rate in bit/s for the throughput figure (1000 to 100000000).
+    #[arg(long, default_value_t = 5e6, allow_hyphen_values = true,
+          value_parser = cli::real(MIN_RATE, MAX_RATE))]
     bit_rate: f64,
     /// Run the driver and one crate over these two serial ports instead (e.g. the two ends of
-    /// `socat -d -d pty,raw,echo=0 pty,raw,echo=0`): DRIVER_PORT CRATE_PORT.
-    #[arg(long, num_args = 2, value_names = ["DRIVER_PORT", "CRATE_PORT"])]
+    /// `socat -d -d pty,raw,echo=0 pty,raw,echo=0`): DRIVER_PORT CRATE_PORT. Takes --messages,
+    /// --seed and --json; the loop's options and the picture do not apply and are refused.
+    #[arg(long, num_args = 2, value_names = ["DRIVER_PORT", "CRATE_PORT"],
+          conflicts_with_all = ["crates", "ber", "line", "window", "retries", "script",
+                                "bit_rate", "picture"])]
     ports: Option<Vec<String>>,
     /// With --ports: run the 1977 panel link (host and a 29-register panel) over the ports
-    /// instead of the highway.
-    #[arg(long, requires = "ports")]
+    /// instead of the highway (five keys chosen by --seed; --messages does not apply).
+    #[arg(long, requires = "ports", conflicts_with = "messages")]
     panel: bool,
     #[command(flatten)]
     common: Common<Highway>,
@@ -84,59 +93,21 @@ fn main() -> ExitCode {
 
 fn run(args: &Args) -> Result<(), Stop> {
     if let Some(ports) = &args.ports {
-        let [driver_port, crate_port] = ports.as_slice() else {
-            return Err("--ports needs two paths".into());
-        };
-        if args.panel {
-            let keys: Vec<u8> = (0..5u64)
-                .map(|k| ((args.common.seed.wrapping_add(k) * 37) % 128) as u8)
-                .collect();
-            let summary = highway::ports::run_panel(driver_port, crate_port, &keys)?;
-            let text = if args.common.json {
-                serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?
-            } else {
-                format!(
-                    "panel link over real ports: host on {driver_port}, panel on {crate_port}\n  \
-                     keys pressed {:?}, delivered {:?}\n  \
-                     {} register sequences in {:.2} s; the panel shows the host's registers: {}",
-                    summary.keys_pressed,
-                    summary.keys_delivered,
-                    summary.sequences,
-                    summary.seconds,
-                    if summary.registers_match { "yes" } else { "NO" }
-                )
-            };
-            cli::print(&text)?;
-            return if summary.registers_match && summary.keys_delivered == summary.keys_pressed {
-                Ok(())
-            } else {
-                Err("the panel link over the ports lost or altered something".into())
-            };
-        }
-        let summary =
-            highway::ports::run(driver_port, crate_port, args.messages, args.common.seed)?;
-        let text = if args.common.json {
-            serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?
-        } else {
-            format!(
-                "serial-highway over real ports: driver on {driver_port}, crate 1 on {crate_port}\n  \
-                 {} commands completed, {} failed, undetected errors: {}\n  \
-                 {} byte clocks in {:.2} s ({:.0} byte round trips per second through the ports)",
-                summary.completed,
-                summary.failed,
-                summary.undetected_errors,
-                summary.clocks,
-                summary.seconds,
-                summary.clocks as f64 / summary.seconds.max(1e-9)
-            )
-        };
-        cli::print(&text)?;
-        return if summary.undetected_errors == 0 {
-            Ok(())
-        } else {
-            Err("undetected errors over the ports".into())
-        };
+        return over_ports(args, ports);
     }
+    let window = match args.window {
+        Some(w) if w > usize::from(args.crates) => {
+            return Err(cli::bad(
+                "--window",
+                format!(
+                    "one command in flight per crate, so at most --crates ({}), got {w}",
+                    args.crates
+                ),
+            ));
+        }
+        Some(w) => w,
+        None => Config::default_window(args.crates),
+    };
     let config = Config {
         crates: args.crates,
         messages: args.messages,
@@ -146,158 +117,88 @@ fn run(args: &Args) -> Result<(), Stop> {
             Line::ByteSerial => LineKind::ByteSerial,
             Line::BitSerial => LineKind::BitSerial,
         },
-        window: args.window,
+        window,
         retries: args.retries,
         bit_rate_hz: args.bit_rate,
         ..Config::default()
     };
-    let crates = config.crates;
-    let mut sim = Sim::new(config)?;
-    if let Some(path) = &args.script {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-        sim.set_script(highway::parse_script(&text, crates)?);
-    }
-    let bar = if args.common.quiet || args.common.json {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(args.messages)
+    let script = match &args.script {
+        Some(path) => {
+            let text = std::fs::read_to_string(path).map_err(|e| {
+                format!(
+                    "--script: cannot read {}: {}",
+                    path.display(),
+                    cli::io_message(&e)
+                )
+            })?;
+            Some(highway::parse_script(&text, args.crates)?)
+        }
+        None => None,
     };
-    if let Ok(style) = ProgressStyle::with_template(
-        "{spinner} commands [{bar:40}] {human_pos}/{human_len} ({eta} left)",
-    ) {
-        bar.set_style(style.progress_chars("=> "));
-    }
-    let chunk = (args.messages / 200).max(1);
-    while !sim.finished() {
-        sim.run_until_done(sim.done() + chunk);
-        bar.set_position(sim.done());
-    }
+    let bar = args.common.progress(args.messages, "commands", "");
+    let summary = highway::run(config, script, |done| bar.set_position(done))?;
     bar.finish_and_clear();
-    let summary = sim.summary();
     if let Some(path) = args.common.picture() {
-        std::fs::write(path, picture(&summary))
+        std::fs::write(path, highway::picture(&summary))
             .map_err(|e| format!("cannot write {}: {}", path.display(), cli::io_message(&e)))?;
     }
-    let text = if args.common.json {
-        serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?
+    if args.common.json {
+        cli::print(&serde_json::to_string_pretty(&summary)?)
     } else {
-        summary_text(&summary, args)
-    };
-    cli::print(&text)
+        cli::print(&highway::summary_text(&summary, args.common.picture()))
+    }
 }
 
-fn summary_text(s: &Summary, args: &Args) -> String {
-    use std::fmt::Write as _;
-    let mut out = String::new();
-    // Writing to a String cannot fail.
-    macro_rules! println {
-        ($($t:tt)*) => { let _ = writeln!(out, $($t)*); };
-    }
-    let c = &s.config;
-    println!(
-        "serial-highway: {} crates, {} commands, bit-error rate {:e} per link ({:?}), seed {}",
-        c.crates, c.messages, c.ber, c.line, c.seed
-    );
-    println!(
-        "  completed {}, failed {}, retries {}, time-outs {}",
-        s.completed, s.failed, s.retries, s.timeouts
-    );
-    println!(
-        "  bits flipped {}; detected at the crates {}, at the driver {}",
-        s.bits_flipped, s.detected_at_crates, s.garbled_at_driver
-    );
-    println!(
-        "  undetected errors: {} (wrong cycles run {}, wrong answers accepted {}, phantom demands {})",
-        s.undetected_errors,
-        s.undetected.wrong_cycles,
-        s.undetected.wrong_answers,
-        s.undetected.phantom_demands
-    );
-    println!("  demands {}, served {}", s.demands, s.demands_served);
-    println!(
-        "  throughput: {:.0} commands/s at {} MHz byte-serial, {:.0} commands/s at {} Mbit/s bit-serial",
-        s.messages_per_s_byte_serial,
-        c.byte_rate_hz / 1e6,
-        s.messages_per_s_bit_serial,
-        c.bit_rate_hz / 1e6
-    );
-    println!("  crate  messages  replies  detected  retries  failed  demands  served");
-    let show: Vec<_> = if s.crates.len() > 12 {
-        // The first and last few, and the busiest with errors.
-        let mut picked: Vec<_> = s
-            .crates
-            .iter()
-            .take(4)
-            .chain(s.crates.iter().rev().take(4))
+/// `--ports`: the driver and one crate, or with `--panel` the panel link, over two real ports.
+fn over_ports(args: &Args, ports: &[String]) -> Result<(), Stop> {
+    let [driver_port, crate_port] = ports else {
+        return Err(cli::bad("--ports", "needs two paths"));
+    };
+    if args.panel {
+        let keys: Vec<u8> = (0..5u64)
+            .map(|k| ((args.common.seed.wrapping_add(k) * 37) % 128) as u8)
             .collect();
-        picked.sort_by_key(|c| c.address);
-        picked.dedup_by_key(|c| c.address);
-        picked
+        let summary = highway::ports::run_panel(driver_port, crate_port, &keys)?;
+        let list = |keys: &[u8]| keys.iter().map(u8::to_string).collect::<Vec<_>>().join(" ");
+        cli::print(&if args.common.json {
+            serde_json::to_string_pretty(&summary)?
+        } else {
+            format!(
+                "panel link over real ports: host on {driver_port}, panel on {crate_port}\n  \
+                 keys pressed {}, delivered {}\n  \
+                 {} register sequences in {:.2} s; the panel shows the host's registers: {}",
+                list(&summary.keys_pressed),
+                list(&summary.keys_delivered),
+                summary.sequences,
+                summary.seconds,
+                if summary.registers_match { "yes" } else { "NO" }
+            )
+        })?;
+        return if summary.registers_match && summary.keys_delivered == summary.keys_pressed {
+            Ok(())
+        } else {
+            Err("the panel link over the ports lost or altered something".into())
+        };
+    }
+    let summary = highway::ports::run(driver_port, crate_port, args.messages, args.common.seed)?;
+    cli::print(&if args.common.json {
+        serde_json::to_string_pretty(&summary)?
     } else {
-        s.crates.iter().collect()
-    };
-    for k in show {
-        println!(
-            "  {:>5}  {:>8}  {:>7}  {:>8}  {:>7}  {:>6}  {:>7}  {:>6}",
-            k.address,
-            k.messages,
-            k.replies,
-            k.detected_errors,
-            k.retries,
-            k.failed,
-            k.demands,
-            k.demands_served
-        );
+        format!(
+            "serial-highway over real ports: driver on {driver_port}, crate 1 on {crate_port}\n  \
+             {} commands completed, {} failed, undetected errors: {}\n  \
+             {} byte clocks in {:.2} s ({:.0} byte round trips per second through the ports)",
+            summary.completed,
+            summary.failed,
+            summary.undetected_errors,
+            summary.clocks,
+            summary.seconds,
+            summary.clocks as f64 / summary.seconds.max(1e-9)
+        )
+    })?;
+    if summary.undetected_errors == 0 {
+        Ok(())
+    } else {
+        Err("undetected errors over the ports".into())
     }
-    if s.crates.len() > 12 {
-        println!("  (all {} crates: --json, or the picture)", s.crates.len());
-    }
-    if let Some(path) = args.common.picture() {
-        println!("  picture: {}", path.display());
-    }
-    out.trim_end().to_string()
-}
-
-fn picture(s: &Summary) -> String {
-    let per_thousand = |f: fn(&highway::CrateSummary) -> u64| -> Vec<(f64, f64)> {
-        s.crates
-            .iter()
-            .map(|c| {
-                (
-                    f64::from(c.address),
-                    1000.0 * f(c) as f64 / c.messages.max(1) as f64,
-                )
-            })
-            .collect()
-    };
-    let series = [
-        svg::Series {
-            label: "retries",
-            colour: "#1f77b4",
-            dashed: false,
-            points: per_thousand(|c| c.retries),
-        },
-        svg::Series {
-            label: "errors caught by the crate",
-            colour: "#d62728",
-            dashed: false,
-            points: per_thousand(|c| c.detected_errors),
-        },
-        svg::Series {
-            label: "demands served",
-            colour: "#2ca02c",
-            dashed: true,
-            points: per_thousand(|c| c.demands_served),
-        },
-    ];
-    svg::line_chart(
-        &format!(
-            "Serial highway, {} crates, BER {:e}: undetected {}",
-            s.config.crates, s.config.ber, s.undetected_errors
-        ),
-        "crate address (position on the loop)",
-        "per 1000 commands to the crate",
-        &series,
-    )
 }
