@@ -456,7 +456,10 @@ fn modbus_with_pymodbus() {
     let r: Value = serde_json::from_slice(&out.stdout).unwrap();
     let log = r["log"].to_string();
     assert!(
-        log.contains("force input 0 on") && log.contains("force output 2 on"),
+        log.contains("force input 0 on")
+            && log.contains("force output 2 on")
+            && log.contains("force output 1 ")
+            && log.contains("release output 1"),
         "{log}"
     );
 }

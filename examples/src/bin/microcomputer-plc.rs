@@ -38,8 +38,9 @@ struct Args {
     #[arg(long)]
     interactive: bool,
     /// Serve the images over Modbus/TCP at this address (e.g. 127.0.0.1:5020) and run in real
-    /// time: discrete inputs 0.. = inputs, coils 0.. = outputs (writing one forces it), coils
-    /// 1000.. force inputs, input registers = counters, holding register 0 ← 1 releases all forces.
+    /// time: discrete inputs 0.. = inputs, coils 0.. = outputs, coils 1000.. = forced inputs
+    /// (functions 5 and 15 force every coil they write), input registers = counters, holding
+    /// registers 0-2 release forcing (functions 6 and 16: each register written acts).
     #[arg(long, value_name = "ADDRESS", conflicts_with_all = ["script", "interactive"])]
     modbus: Option<String>,
     /// With --modbus: seconds to run before stopping (more than 0, at most 86400; default 30).
