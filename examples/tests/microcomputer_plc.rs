@@ -108,29 +108,87 @@ fn interactive_monitor_on_stdin() {
     );
 }
 
+/// Every refused argument: exit code 2 and a message naming the option (and the bound for a
+/// range), never a panic.
 #[test]
-fn bad_input_is_a_clear_message() {
-    for (args, needle) in [
-        (vec!["--signals", "motor,warp"], "no signal"),
-        (vec!["--window", "0"], "window"),
-        (vec!["--script", "/nonexistent"], "cannot read"),
-        (
-            vec!["--modbus", "127.0.0.1:5020", "--seconds", "0"],
-            "seconds",
-        ),
-        (vec!["--modbus", "not an address"], "cannot listen"),
-    ] {
-        let out = plc(&[args.as_slice(), &["--no-svg"]].concat());
-        assert_eq!(out.status.code(), Some(2), "{args:?}");
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.contains(needle), "{args:?}: {err}");
-    }
+fn bad_inputs_are_refused_naming_the_option() {
     let dir = std::env::temp_dir().join(format!("regler-plc-bad-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let script = dir.join("bad.txt");
     std::fs::write(&script, "run 3\nforce in 99 1\n").unwrap();
-    let out = plc(&["--script", script.to_str().unwrap(), "--no-svg"]);
-    assert!(String::from_utf8_lossy(&out.stderr).contains("script line 2"));
+    let not_text = dir.join("latin1.txt");
+    std::fs::write(&not_text, b"run 3\nshow \xe9\n").unwrap();
+    let (script, not_text) = (script.to_str().unwrap(), not_text.to_str().unwrap());
+    let table: &[(&[&str], &[&str])] = &[
+        (&["--signals", "motor,warp"], &["--signals", "warp"]),
+        (&["--window", "0"], &["--window", "1 to 100000"]),
+        (&["--window", "100001"], &["--window", "1 to 100000"]),
+        (&["--window", "-1"], &["--window", "1 to 100000"]),
+        (
+            &["--seconds", "0", "--modbus", "127.0.0.1:0"],
+            &["--seconds", "more than 0"],
+        ),
+        (
+            &["--seconds", "-1", "--modbus", "127.0.0.1:0"],
+            &["--seconds", "more than 0", "got -1"],
+        ),
+        (
+            &["--seconds", "1e300", "--modbus", "127.0.0.1:0"],
+            &["--seconds", "at most 86400", "got 1e300"],
+        ),
+        (
+            &["--seconds", "5"],
+            &["--seconds", "only applies with --modbus"],
+        ),
+        (&["--seed", "-1"], &["--seed"]),
+        (
+            &["--script", "/nonexistent"],
+            &["--script", "cannot read /nonexistent"],
+        ),
+        (&["--script", script], &["script line 2", "point 99"]),
+        (&["--script", not_text], &["script line 2", "not UTF-8"]),
+        (
+            &["--script", script, "--interactive"],
+            &["--script", "--interactive"],
+        ),
+        (
+            &["--modbus", "127.0.0.1:0", "--interactive"],
+            &["--modbus", "--interactive"],
+        ),
+        (
+            &["--modbus", "127.0.0.1:0", "--script", script],
+            &["--modbus", "--script"],
+        ),
+        (
+            &["--modbus", "not an address"],
+            &["--modbus", "cannot listen on not an address"],
+        ),
+        (
+            &["--no-svg", "--svg", "x.svg"],
+            &["--no-picture", "--picture"],
+        ),
+        (
+            &["--no-svg", "--window", "100"],
+            &["--window", "--no-picture"],
+        ),
+        (
+            &["--no-svg", "--signals", "motor"],
+            &["--signals", "--no-picture"],
+        ),
+        (
+            &["--svg", "/nonexistent/dir/x.svg"],
+            &["--picture", "cannot write"],
+        ),
+    ];
+    for (args, needles) in table {
+        let out = plc(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        for needle in *needles {
+            assert!(err.contains(needle), "{args:?}: {needle:?} not in {err}");
+        }
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -274,13 +332,21 @@ fn modbus_raw_frames_follow_the_specification() {
     );
 }
 
-/// mbpoll, a Modbus client from Debian, against the server: reads, a force, a one-point
-/// release and the exceptions, as a user at a terminal would see them. `.ci/run` installs
-/// mbpoll and runs this test.
+/// Fails (under `--ignored`) with what to install when `tool` is not on the PATH.
+fn need(tool: &str, install: &str) {
+    let found = std::env::var_os("PATH")
+        .is_some_and(|path| std::env::split_paths(&path).any(|dir| dir.join(tool).is_file()));
+    assert!(found, "{tool} is not on the PATH: {install}");
+}
+
+/// mbpoll, a Modbus client from Debian, against the server: reads, single and block writes of
+/// coils and registers (functions 5, 15, 6, 16), one-point releases and the exceptions, as a user
+/// at a terminal would see them. `.ci/run` installs mbpoll and runs this test.
 #[test]
-#[ignore = "needs mbpoll (apt-get install mbpoll); .ci/run runs it"]
+#[ignore = "needs mbpoll on the PATH (apt-get install mbpoll); .ci/run runs it"]
 fn modbus_with_mbpoll() {
-    let (child, host, port) = modbus_server("8");
+    need("mbpoll", "apt-get install mbpoll");
+    let (child, host, port) = modbus_server("10");
     let mbpoll = |args: &[&str]| {
         let out = Command::new("mbpoll")
             .args(["-m", "tcp", "-p", &port, "-0", "-1", "-o", "2"])
@@ -310,6 +376,35 @@ fn modbus_with_mbpoll() {
     std::thread::sleep(std::time::Duration::from_millis(300));
     let (_, text) = mbpoll(&["-a", "1", "-t", "1", "-r", "201", &host]);
     assert!(text.contains("[201]: \t0"), "{text}");
+    // A block of coils (function 15): outputs 0 and 1 both forced, whatever they showed.
+    let (ok, text) = mbpoll(&["-a", "1", "-t", "0", "-r", "0", &host, "1", "0"]);
+    assert!(ok && text.contains("Written 2 references"), "{text}");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let (ok, text) = mbpoll(&["-a", "1", "-t", "1", "-r", "100", "-c", "2", &host]);
+    assert!(
+        ok && text.contains("[100]: \t1") && text.contains("[101]: \t1"),
+        "{text}"
+    );
+    // A block of registers (function 16): 0 ← 0 nothing, 1 ← 1 releases output 1, 2 ← 0 input 0.
+    let (ok, text) = mbpoll(&["-a", "1", "-t", "4", "-r", "0", &host, "0", "1", "0"]);
+    assert!(ok && text.contains("Written 3 references"), "{text}");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let (ok, text) = mbpoll(&["-a", "1", "-t", "1", "-r", "100", "-c", "2", &host]);
+    assert!(
+        ok && text.contains("[100]: \t1") && text.contains("[101]: \t0"),
+        "{text}"
+    );
+    // Blocks that reach past the map or hold a value not taken: refused whole.
+    let (ok, text) = mbpoll(&["-a", "1", "-t", "0", "-r", "14", &host, "1", "0", "1"]);
+    assert!(!ok && text.contains("Illegal data address"), "{text}");
+    let (ok, text) = mbpoll(&["-a", "1", "-t", "4", "-r", "0", &host, "1", "16"]);
+    assert!(!ok && text.contains("Illegal data value"), "{text}");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let (ok, text) = mbpoll(&["-a", "1", "-t", "1", "-r", "100", "-c", "2", &host]);
+    assert!(
+        ok && text.contains("[100]: \t1"),
+        "the refused block released nothing\n{text}"
+    );
     // The exceptions, as mbpoll names them.
     let (ok, text) = mbpoll(&["-a", "1", "-t", "0", "-r", "16", &host]);
     assert!(!ok && text.contains("Illegal data address"), "{text}");
@@ -319,19 +414,37 @@ fn modbus_with_mbpoll() {
     assert!(!ok && text.contains("Illegal data address"), "{text}");
     let out = child.wait_with_output().unwrap();
     let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let log = r["log"].to_string();
+    for line in [
+        "release input 1",
+        "force output 0 on",
+        "force output 1 off",
+        "release output 1",
+        "release input 0",
+    ] {
+        assert!(log.contains(line), "{line}: {log}");
+    }
     assert!(
-        r["log"].to_string().contains("release input 1"),
-        "{}",
-        r["log"]
+        !log.contains("release all"),
+        "the refused block acted: {log}"
     );
 }
 
 /// A real Modbus client that no one here wrote (pymodbus) reads the images, forces a coil and
-/// sees the program react. Needs `python3` with pymodbus on the PATH; `.ci/run` installs it in a virtual environment and
-/// runs this test.
+/// sees the program react. Needs a `python3` on the PATH that imports pymodbus; `.ci/run`
+/// installs it in a virtual environment and runs this test.
 #[test]
-#[ignore = "needs python3 with pymodbus (python3 -m pip install pymodbus); .ci/run runs it"]
+#[ignore = "needs a python3 on the PATH that imports pymodbus (python3 -m venv /tmp/venv && /tmp/venv/bin/pip install pymodbus, then PATH=/tmp/venv/bin:$PATH); .ci/run runs it"]
 fn modbus_with_pymodbus() {
+    let importable = Command::new("python3")
+        .args(["-c", "import pymodbus"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    assert!(
+        importable,
+        "the python3 on the PATH cannot import pymodbus: python3 -m venv /tmp/venv && \
+         /tmp/venv/bin/pip install pymodbus, then run with PATH=/tmp/venv/bin:$PATH"
+    );
     let (child, host, port) = modbus_server("12");
     let client = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/modbus_client.py");
     let status = Command::new("python3")
@@ -343,7 +456,10 @@ fn modbus_with_pymodbus() {
     let r: Value = serde_json::from_slice(&out.stdout).unwrap();
     let log = r["log"].to_string();
     assert!(
-        log.contains("force input 0 on") && log.contains("force output 2 on"),
+        log.contains("force input 0 on")
+            && log.contains("force output 2 on")
+            && log.contains("force output 1 ")
+            && log.contains("release output 1"),
         "{log}"
     );
 }
@@ -401,8 +517,8 @@ fn monitor_commands_behave_like_a_monitor() {
 fn options_are_parsed_like_the_other_programs() {
     let err = |args: &[&str]| String::from_utf8(plc(args).stderr).unwrap();
     assert!(err(&["--seed", "-1"]).contains("invalid value '-1' for '--seed"));
-    assert!(err(&["--seconds", "5"]).contains("--seconds only applies with --modbus"));
-    assert!(err(&["--window", "0"]).contains("window must be between 1 and 100000"));
+    assert!(err(&["--seconds", "5"]).contains("--seconds: only applies with --modbus"));
+    assert!(err(&["--window", "0"]).contains("must be from 1 to 100000, got 0"));
 }
 
 /// The default picture shows what the program is for: a reject-gate opening, with cycle ticks.
@@ -425,4 +541,305 @@ fn default_timing_diagram_shows_the_gate() {
         );
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The forced flags as the server shows them: discrete inputs 100–115 (outputs) or 200–215
+/// (inputs) as a 16-bit mask.
+fn forced_mask(s: &mut std::net::TcpStream, first: u8) -> u16 {
+    let r = raw(s, 1, &[2, 0, first, 0, 16]).1;
+    u16::from_le_bytes([r[2], r[3]])
+}
+
+/// Polls until the forced mask at `first` is `want` (the cycle carries requests out within 50 ms).
+fn wait_mask(s: &mut std::net::TcpStream, first: u8, want: u16) -> u16 {
+    let mut got = 0;
+    for _ in 0..60 {
+        got = forced_mask(s, first);
+        if got == want {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    got
+}
+
+/// Every write function acts on every point it names — 15 as 5 does, also when the value written
+/// is the one the coil shows; 16 as 6 does, register by register — and a block that reaches
+/// past the map, or holds a value a register does not take, is an exception and acts on nothing.
+#[test]
+fn modbus_every_write_function_acts_on_every_point() {
+    let (child, host, port) = modbus_server("8");
+    let mut s = std::net::TcpStream::connect(format!("{host}:{port}")).unwrap();
+    s.set_read_timeout(Some(std::time::Duration::from_secs(3)))
+        .unwrap();
+    let exc = |f: u8, code: u8| vec![f | 0x80, code];
+    // Function 15 with the present values of coils 0-1 (the issue's case): both outputs forced.
+    let present = raw(&mut s, 1, &[1, 0, 0, 0, 2]).1[2] & 0b11;
+    assert_eq!(
+        raw(&mut s, 1, &[15, 0, 0, 0, 2, 1, present]).1,
+        vec![15, 0, 0, 0, 2]
+    );
+    assert_eq!(
+        wait_mask(&mut s, 100, 0b11),
+        0b11,
+        "outputs 0-1 forced by function 15"
+    );
+    // Function 15 on the input coils: inputs 0, 1 and 2 forced to 1, 0, 1; read back as written.
+    assert_eq!(
+        raw(&mut s, 1, &[15, 0x03, 0xE8, 0, 3, 1, 0b101]).1,
+        vec![15, 0x03, 0xE8, 0, 3]
+    );
+    assert_eq!(
+        wait_mask(&mut s, 200, 0b111),
+        0b111,
+        "inputs 0-2 forced by function 15"
+    );
+    assert_eq!(raw(&mut s, 1, &[1, 0x03, 0xE8, 0, 3]).1, vec![1, 1, 0b101]);
+    // Function 5 on output 3, writing off: forced as well.
+    assert_eq!(raw(&mut s, 1, &[5, 0, 3, 0, 0]).1, vec![5, 0, 3, 0, 0]);
+    assert_eq!(wait_mask(&mut s, 100, 0b1011), 0b1011);
+    // Refused blocks act on nothing: coils 14-16 (past the map), registers 1-3 (past the map),
+    // registers 0-1 with release-output 16 (no such point; register 0 ← 1 must not act either).
+    for (pdu, code) in [
+        (&[15, 0, 14, 0, 3, 1, 0b111][..], 2),
+        (&[15, 0x03, 0xF6, 0, 8, 1, 0xFF], 2),
+        (&[16, 0, 1, 0, 3, 6, 0, 0, 0, 0, 0, 0], 2),
+        (&[16, 0, 0, 0, 2, 4, 0, 1, 0, 16], 3),
+        (&[16, 0, 0, 0, 0x7C, 0xF8], 3),
+        (&[15, 0, 0, 0x07, 0xB1, 0xF7], 3),
+    ] {
+        assert_eq!(raw(&mut s, 1, pdu).1, exc(pdu[0], code), "{pdu:?}");
+    }
+    std::thread::sleep(std::time::Duration::from_millis(200));
+    assert_eq!(forced_mask(&mut s, 100), 0b1011, "nothing released");
+    assert_eq!(forced_mask(&mut s, 200), 0b111, "nothing released");
+    // Function 16 on registers 0-2 with 0, 1, 2: register 0 ← 0 does nothing, output 1 and input 2
+    // are released.
+    assert_eq!(
+        raw(&mut s, 1, &[16, 0, 0, 0, 3, 6, 0, 0, 0, 1, 0, 2]).1,
+        vec![16, 0, 0, 0, 3]
+    );
+    assert_eq!(
+        wait_mask(&mut s, 100, 0b1001),
+        0b1001,
+        "output 1 released by function 16"
+    );
+    assert_eq!(
+        wait_mask(&mut s, 200, 0b011),
+        0b011,
+        "input 2 released by function 16"
+    );
+    // The registers read 0 again.
+    assert_eq!(
+        raw(&mut s, 1, &[3, 0, 0, 0, 3]).1,
+        vec![3, 6, 0, 0, 0, 0, 0, 0]
+    );
+    // Function 6: register 0 ← 1 releases everything.
+    assert_eq!(raw(&mut s, 1, &[6, 0, 0, 0, 1]).1, vec![6, 0, 0, 0, 1]);
+    assert_eq!(wait_mask(&mut s, 100, 0), 0);
+    assert_eq!(wait_mask(&mut s, 200, 0), 0);
+    drop(s);
+    let out = child.wait_with_output().unwrap();
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let log = r["log"].to_string();
+    for line in [
+        "force output 0 ",
+        "force output 1 ",
+        "force input 0 on",
+        "force input 1 off",
+        "force input 2 on",
+        "force output 3 off",
+        "release output 1",
+        "release input 2",
+        "release all forced points",
+    ] {
+        assert!(log.contains(line), "{line}: {log}");
+    }
+    assert!(!log.contains("release output 16"), "{log}");
+}
+
+/// The reader of stdout goes away after one line while the program still has far more than a
+/// pipe buffer to write: a quiet, successful end in every output mode.
+#[test]
+fn a_closed_pipe_ends_quietly() {
+    let dir = std::env::temp_dir().join(format!("regler-plc-pipe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // 3 000 × help is about 4 MB of text (and of JSON log): far more than a pipe holds.
+    let script = dir.join("long.txt");
+    std::fs::write(&script, "run 10\nhelp\n".repeat(3_000)).unwrap();
+    let script = script.to_str().unwrap();
+    let stdin_commands = "help\n".repeat(3_000);
+    let modes: [(&[&str], &str); 4] = [
+        (&["--script", script, "--no-svg"], ""),
+        (&["--script", script, "--no-svg", "--json"], ""),
+        (&["--interactive", "--no-svg"], &stdin_commands),
+        (&["--interactive", "--no-svg", "-q"], &stdin_commands),
+    ];
+    for (args, stdin) in modes {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_microcomputer-plc"))
+            .args(args)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut input = child.stdin.take().unwrap();
+        let feeder = {
+            let stdin = stdin.to_string();
+            std::thread::spawn(move || {
+                let _ = input.write_all(stdin.as_bytes());
+            })
+        };
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        assert!(!line.is_empty(), "{args:?}");
+        let out = child.wait_with_output().unwrap();
+        feeder.join().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{args:?}: {:?} {err}", out.status);
+        assert!(
+            !err.contains("panicked") && !err.contains("Broken pipe"),
+            "{args:?}: {err}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The issue's own commands, through a shell pipe into `head`, as a user typed them.
+#[test]
+fn the_issue_pipes_into_head_end_quietly() {
+    let plc = env!("CARGO_BIN_EXE_microcomputer-plc");
+    // (the pipeline, the program's place in it)
+    for (pipeline, place) in [
+        (format!("'{plc}' --no-svg | head -3"), 0),
+        (format!("'{plc}' --no-svg --json | head -3"), 0),
+        (
+            format!("yes stats | head -2000 | '{plc}' --interactive | head -2"),
+            2,
+        ),
+    ] {
+        for _ in 0..3 {
+            let out = Command::new("bash")
+                .args([
+                    "-c",
+                    &format!("{pipeline} >/dev/null; exit ${{PIPESTATUS[{place}]}}"),
+                ])
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(out.status.success(), "{pipeline}: {:?} {err}", out.status);
+            assert!(err.is_empty(), "{pipeline}: {err}");
+        }
+    }
+}
+
+/// Debug formatting that must never reach a user.
+const DEBUG_TEXT: [&str; 12] = [
+    "Some(",
+    "None",
+    "Ok(",
+    "Err(",
+    "\"Ok\":",
+    "Custom {",
+    " { ",
+    "Batch(",
+    "Shift(",
+    "OutputOn(",
+    "ForceOutput(",
+    "Cycle(",
+];
+
+fn assert_no_debug(what: &str, text: &str) {
+    for debug in DEBUG_TEXT {
+        assert!(
+            !text.contains(debug),
+            "{what}: debug text {debug:?} in\n{text}"
+        );
+    }
+}
+
+/// No user-facing output shows Rust `Debug` text: the demonstration, its JSON, the monitor's
+/// answers and errors, and the stderr of refused runs.
+#[test]
+fn no_debug_text_reaches_the_user() {
+    let text = plc(&["--no-svg"]);
+    assert_no_debug("text", &String::from_utf8_lossy(&text.stdout));
+    let json = plc(&["--no-svg", "--json"]);
+    assert_no_debug("json", &String::from_utf8_lossy(&json.stdout));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_microcomputer-plc"))
+        .args(["--interactive", "--no-svg"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(
+            b"run\nforce in 3\nforce in 99 1\nbreak cycle 0\nbreak in part off\nforce out gate 1\n\
+              step\nspool\nrun 2000\nspool\nbreak out jam on\ncont\nbogus\nunforce out x\nquit\n",
+        )
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert_no_debug("monitor", &String::from_utf8_lossy(&out.stdout));
+    assert_no_debug("monitor stderr", &String::from_utf8_lossy(&out.stderr));
+    for args in [
+        &["--window", "0"][..],
+        &["--seconds", "-1", "--modbus", "127.0.0.1:0"],
+        &["--modbus", "not an address"],
+        &["--script", "/nonexistent"],
+        &["--svg", "/nonexistent/dir/x.svg"],
+    ] {
+        assert_no_debug("stderr", &String::from_utf8_lossy(&plc(args).stderr));
+    }
+}
+
+/// The monitor's messages: usage for incomplete commands, a non-UTF-8 line reported and passed
+/// over, cont at its limit says so, and the closing statistics come once.
+#[test]
+fn monitor_messages_say_what_happened() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_microcomputer-plc"))
+        .args(["--interactive", "--no-svg"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"run\nforce in 3\nshow \xff\xfe\ncont\nstats\nquit\n")
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("? usage: run N (run N cycles (at most 1000000), stopping at a breakpoint)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("? usage: force in|out POINT on|off ("),
+        "{text}"
+    );
+    assert!(
+        text.contains("? line 3 is not UTF-8 text: ignored"),
+        "{text}"
+    );
+    assert!(
+        text.contains("ran 72000 cycles: stopped at cont's limit of 72000 cycles"),
+        "the monitor went on after the bad line\n{text}"
+    );
+    assert_eq!(
+        text.matches("cycles 72000  busy").count(),
+        1,
+        "the closing statistics right after `stats` are not printed again\n{text}"
+    );
+    // The demonstration ends with `stats`: printed once.
+    let demo = String::from_utf8(plc(&["--no-svg"]).stdout).unwrap();
+    assert_eq!(demo.matches("cycles 4493  busy").count(), 1, "{demo}");
 }

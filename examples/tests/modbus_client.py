@@ -2,7 +2,8 @@
 
 Usage: python3 modbus_client.py HOST PORT
 Reads the images, forces the START input through its coil, and checks that the program reacts
-(the motor output comes on), then releases the forcing and forces an output coil.
+(the motor output comes on), then releases the forcing and forces an output coil, then writes a
+block of coils (function 15) and a block of registers (function 16) and sees every point act.
 Exit code 0 when every check holds.
 """
 import sys
@@ -55,6 +56,22 @@ def main():
     # Force an output coil: the reject gate opens whatever the program says.
     assert not client.write_coil(GATE, True).isError()
     wait_for("gate forced open", lambda: coils(GATE, 1)[0])
+
+    # A block of coils (function 15) forces every coil it names, also one written with the value
+    # it shows: outputs 0 and 2 forced on, then both visible as forced (discrete inputs 100-115).
+    shown = coils(MOTOR, 3)
+    assert not client.write_coils(MOTOR, [True, shown[1], True]).isError()
+    wait_for(
+        "outputs 0-2 forced by write_coils",
+        lambda: client.read_discrete_inputs(100, count=3).bits[:3] == [True, True, True],
+    )
+    # A block of registers (function 16): 0 <- 0 nothing, 1 <- 1 releases output 1, 2 <- 0 input 0.
+    assert not client.write_registers(0, [0, 1, 0]).isError()
+    wait_for(
+        "output 1 released by write_registers",
+        lambda: client.read_discrete_inputs(100, count=3).bits[:3] == [True, False, True],
+    )
+    wait_for("input 0 released", lambda: not client.read_discrete_inputs(200, count=1).bits[0])
 
     registers = client.read_input_registers(0, count=19)
     assert (registers.registers[3] << 16 | registers.registers[4]) > cycles_before, "cycles went on"

@@ -1,0 +1,448 @@
+//! The images over Modbus/TCP, in real time: the PLC cycles against the wall clock and a server
+//! thread per client answers from tables the cycle publishes; what a client writes becomes a
+//! request the cycle carries out before its next scan.
+//!
+//! Frames are coded by the `rmodbus` crate, behind [`check`], which holds every request to the
+//! specification and the map first (an exception answers anything else, and then nothing acts).
+//!
+//! # What each write function does
+//! Every write acts on every point it names, whether or not the value changes:
+//! - **5** write single coil, **15** write multiple coils: each coil written forces its point to
+//!   the value written — coils 0–15 force output p, coils 1000–1015 force input p. Writing the
+//!   value a coil already shows still forces it (a SCADA client writing a block of coils means
+//!   every one of them).
+//! - **6** write single register, **16** write multiple registers: each register written is a
+//!   command, carried out in address order — register 0 ← 1 releases every forced point (← 0 does
+//!   nothing), register 1 ← p releases output p, register 2 ← p releases input p (p = 0 included,
+//!   so a block write of zeros to 1–2 releases output 0 and input 0). They read as 0.
+//!
+//! A request is carried out whole or not at all: a block that reaches past the map is exception
+//! 2 (ILLEGAL DATA ADDRESS) and a value a register does not take is exception 3 (ILLEGAL DATA
+//! VALUE), and then no point of it acts.
+
+use std::io::{Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use rmodbus::server::ModbusFrame;
+use rmodbus::server::storage::ModbusStorage;
+use rmodbus::{ModbusFrameBuf, ModbusProto};
+
+use super::PERIOD_MS;
+use super::monitor::Transcript;
+use super::simulator::Simulator;
+use crate::cli::{self, Stop};
+
+/// What a Modbus client asked of the monitor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Request {
+    /// Force output p (coil p) to the value.
+    ForceOutput(usize, bool),
+    /// Force input p (coil 1000 + p) to the value.
+    ForceInput(usize, bool),
+    /// Release output p (holding register 1 ← p).
+    ReleaseOutput(usize),
+    /// Release input p (holding register 2 ← p).
+    ReleaseInput(usize),
+    /// Release every forced point (holding register 0 ← 1).
+    ReleaseAll,
+}
+
+impl std::fmt::Display for Request {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let on = |v: bool| if v { "on" } else { "off" };
+        match *self {
+            Request::ForceOutput(p, v) => write!(f, "force output {p} {}", on(v)),
+            Request::ForceInput(p, v) => write!(f, "force input {p} {}", on(v)),
+            Request::ReleaseOutput(p) => write!(f, "release output {p}"),
+            Request::ReleaseInput(p) => write!(f, "release input {p}"),
+            Request::ReleaseAll => f.write_str("release all forced points"),
+        }
+    }
+}
+
+type Storage = ModbusStorage<1024, 1024, 32, 32>;
+
+struct Shared {
+    storage: Storage,
+    requests: Vec<Request>,
+}
+
+/// The Modbus map (documented in examples/README.md). Every address outside it is answered
+/// with exception 2, ILLEGAL DATA ADDRESS.
+pub mod map {
+    /// Coils 0–15: the output image; writing one forces that output.
+    pub const OUTPUT_COILS: u16 = 0;
+    /// Coils 1000–1015: the forced value of input p; writing one forces that input.
+    pub const INPUT_COILS: u16 = 1000;
+    /// Discrete inputs 0–15: the input image.
+    pub const INPUTS: u16 = 0;
+    /// Discrete inputs 100–115: output p is forced.
+    pub const OUTPUT_FORCED: u16 = 100;
+    /// Discrete inputs 200–215: input p is forced.
+    pub const INPUT_FORCED: u16 = 200;
+    /// Input registers 0–18 (32-bit counters take two, high word first).
+    pub const INPUT_REGISTERS: u16 = 19;
+    /// Holding register 0: write 1 to release every forced point; 1: write p to release output
+    /// p; 2: write p to release input p. They read as 0.
+    pub const HOLDING_REGISTERS: u16 = 3;
+    /// Points per image.
+    pub const POINTS: u16 = 16;
+
+    /// Whether `[start, start + count)` lies inside one of `blocks` (start, length).
+    pub fn inside(start: u16, count: u16, blocks: &[(u16, u16)]) -> bool {
+        let end = u32::from(start) + u32::from(count);
+        blocks
+            .iter()
+            .any(|&(b, n)| start >= b && end <= u32::from(b) + u32::from(n))
+    }
+}
+
+/// Modbus exception code 1: the function is not served.
+pub const ILLEGAL_FUNCTION: u8 = 1;
+/// Modbus exception code 2: an address outside the map.
+pub const ILLEGAL_DATA_ADDRESS: u8 = 2;
+/// Modbus exception code 3: a quantity, byte count or value not taken.
+pub const ILLEGAL_DATA_VALUE: u8 = 3;
+/// Modbus exception code 0x0B: no device behind that unit id.
+pub const GATEWAY_TARGET_FAILED: u8 = 0x0B;
+
+/// The unit ids this server answers: 1 (its own), and 0 and 255, which the Modbus/TCP
+/// implementation guide leaves to a server reached by its IP address. Others are answered with
+/// exception 0x0B, as a gateway with no device behind that id.
+fn answers_unit(unit: u8) -> bool {
+    matches!(unit, 0 | 1 | 255)
+}
+
+/// Checks a request PDU against the specification and the map; the exception code if it fails.
+/// Order as the specification's server state diagrams: function, quantity and byte count,
+/// address range, value.
+pub fn check(pdu: &[u8]) -> Result<(), u8> {
+    let word = |i: usize| pdu.get(i..i + 2).map(|b| u16::from_be_bytes([b[0], b[1]]));
+    let (Some(&function), Some(address)) = (pdu.first(), word(1)) else {
+        return Err(ILLEGAL_DATA_VALUE);
+    };
+    let coils = [
+        (map::OUTPUT_COILS, map::POINTS),
+        (map::INPUT_COILS, map::POINTS),
+    ];
+    let discretes = [
+        (map::INPUTS, map::POINTS),
+        (map::OUTPUT_FORCED, map::POINTS),
+        (map::INPUT_FORCED, map::POINTS),
+    ];
+    let holding = [(0, map::HOLDING_REGISTERS)];
+    let holding_value_ok = |register: u16, value: u16| match register {
+        0 => value <= 1,
+        _ => value < map::POINTS,
+    };
+    let quantity = word(3).ok_or(ILLEGAL_DATA_VALUE)?;
+    match function {
+        1..=4 => {
+            let max = if function <= 2 { 2000 } else { 125 };
+            if !(1..=max).contains(&quantity) || pdu.len() != 5 {
+                return Err(ILLEGAL_DATA_VALUE);
+            }
+            let ok = match function {
+                1 => map::inside(address, quantity, &coils),
+                2 => map::inside(address, quantity, &discretes),
+                3 => map::inside(address, quantity, &holding),
+                _ => map::inside(address, quantity, &[(0, map::INPUT_REGISTERS)]),
+            };
+            if ok {
+                Ok(())
+            } else {
+                Err(ILLEGAL_DATA_ADDRESS)
+            }
+        }
+        5 => {
+            // The value is the "quantity" field here: only 0x0000 and 0xFF00 are coil values.
+            if pdu.len() != 5 || !matches!(quantity, 0x0000 | 0xFF00) {
+                return Err(ILLEGAL_DATA_VALUE);
+            }
+            if map::inside(address, 1, &coils) {
+                Ok(())
+            } else {
+                Err(ILLEGAL_DATA_ADDRESS)
+            }
+        }
+        6 => {
+            if pdu.len() != 5 {
+                return Err(ILLEGAL_DATA_VALUE);
+            }
+            if !map::inside(address, 1, &holding) {
+                return Err(ILLEGAL_DATA_ADDRESS);
+            }
+            if holding_value_ok(address, quantity) {
+                Ok(())
+            } else {
+                Err(ILLEGAL_DATA_VALUE)
+            }
+        }
+        15 | 16 => {
+            let max = if function == 15 { 0x07B0 } else { 0x007B };
+            let bytes = usize::from(*pdu.get(5).ok_or(ILLEGAL_DATA_VALUE)?);
+            let want = if function == 15 {
+                usize::from(quantity).div_ceil(8)
+            } else {
+                2 * usize::from(quantity)
+            };
+            if !(1..=max).contains(&quantity) || bytes != want || pdu.len() != 6 + bytes {
+                return Err(ILLEGAL_DATA_VALUE);
+            }
+            let blocks: &[(u16, u16)] = if function == 15 { &coils } else { &holding };
+            if !map::inside(address, quantity, blocks) {
+                return Err(ILLEGAL_DATA_ADDRESS);
+            }
+            if function == 16 {
+                for k in 0..quantity {
+                    let value = word(6 + 2 * usize::from(k)).ok_or(ILLEGAL_DATA_VALUE)?;
+                    if !holding_value_ok(address + k, value) {
+                        return Err(ILLEGAL_DATA_VALUE);
+                    }
+                }
+            }
+            Ok(())
+        }
+        _ => Err(ILLEGAL_FUNCTION),
+    }
+}
+
+/// An exception response to the request in `frame` (MBAP header and PDU).
+pub fn exception(frame: &[u8], function: u8, code: u8) -> Vec<u8> {
+    let mut reply = frame[..4].to_vec(); // transaction id, protocol id
+    reply.extend_from_slice(&3u16.to_be_bytes()); // unit id + 2 bytes of PDU
+    reply.push(frame[6]);
+    reply.push(function | 0x80);
+    reply.push(code);
+    reply
+}
+
+/// What a write request (its PDU, already passed by [`check`]) asks for: one request for every
+/// point it names, in address order (see the module's documentation). Reads ask for nothing.
+#[must_use]
+pub fn requests(pdu: &[u8]) -> Vec<Request> {
+    let word = |i: usize| {
+        pdu.get(i..i + 2)
+            .map_or(0, |b| u16::from_be_bytes([b[0], b[1]]))
+    };
+    let (function, address, second) = (pdu.first().copied(), word(1), word(3));
+    let coil = |a: u16, on: bool| {
+        if a >= map::INPUT_COILS {
+            Request::ForceInput(usize::from(a - map::INPUT_COILS), on)
+        } else {
+            Request::ForceOutput(usize::from(a - map::OUTPUT_COILS), on)
+        }
+    };
+    let holding = |register: u16, value: u16| match register {
+        0 => (value == 1).then_some(Request::ReleaseAll),
+        1 => Some(Request::ReleaseOutput(usize::from(value))),
+        _ => Some(Request::ReleaseInput(usize::from(value))),
+    };
+    match function {
+        Some(5) => vec![coil(address, second == 0xFF00)],
+        Some(15) => (0..second)
+            .map(|k| {
+                let byte = pdu.get(6 + usize::from(k / 8)).copied().unwrap_or(0);
+                coil(address + k, byte >> (k % 8) & 1 == 1)
+            })
+            .collect(),
+        Some(6) => holding(address, second).into_iter().collect(),
+        Some(16) => (0..second)
+            .filter_map(|k| holding(address + k, word(6 + 2 * usize::from(k))))
+            .collect(),
+        _ => Vec::new(),
+    }
+}
+
+/// Runs the PLC in real time for `seconds`, serving its images over Modbus/TCP at `address`
+/// (announced on stderr, so `--json` stays clean); every request carried out is noted in `t`.
+///
+/// # Errors
+/// The address cannot be listened on, or [`Stop::Closed`] when stdout's reader has gone.
+pub fn serve(
+    sim: &mut Simulator,
+    address: &str,
+    seconds: f64,
+    t: &mut Transcript,
+) -> Result<(), Stop> {
+    let listener = TcpListener::bind(address).map_err(|e| {
+        cli::bad(
+            "--modbus",
+            format!("cannot listen on {address}: {}", cli::io_message(&e)),
+        )
+    })?;
+    let local = listener
+        .local_addr()
+        .map_err(|e| cli::bad("--modbus", cli::io_message(&e)))?;
+    // A test reads the address from this line.
+    let _ = writeln!(
+        std::io::stderr(),
+        "Modbus/TCP on {local} (unit ids 0, 1, 255): discrete inputs 0-15 = inputs, 100-115 / 200-215 = output / input forced; coils 0-15 = outputs, 1000-1015 force inputs; input registers 0-18; holding 0-2 release forcing"
+    );
+    sim.plant.use_real_clock();
+    let shared = Arc::new(Mutex::new(Shared {
+        storage: Storage::new(),
+        requests: Vec::new(),
+    }));
+    let server_state = Arc::clone(&shared);
+    std::thread::spawn(move || {
+        for stream in listener.incoming().flatten() {
+            let state = Arc::clone(&server_state);
+            std::thread::spawn(move || {
+                let _ = client(stream, &state);
+            });
+        }
+    });
+    let start = Instant::now();
+    let period = Duration::from_millis(u64::from(PERIOD_MS));
+    let mut next = start;
+    while start.elapsed().as_secs_f64() < seconds {
+        let requests: Vec<Request> = match shared.lock() {
+            Ok(mut s) => std::mem::take(&mut s.requests),
+            Err(_) => return Err("the Modbus server thread failed".into()),
+        };
+        for r in requests {
+            let line = format!(
+                "modbus, cycle {}: {r}{}",
+                sim.plc.cycle_count(),
+                carry_out(sim, r)
+            );
+            t.note(line)?;
+        }
+        sim.run(1);
+        if let Ok(mut s) = shared.lock() {
+            publish(sim, &mut s.storage);
+        }
+        next += period;
+        if let Some(wait) = next.checked_duration_since(Instant::now()) {
+            std::thread::sleep(wait);
+        }
+    }
+    Ok(())
+}
+
+/// Carries out one request on the executive: nothing, or ` refused: why`.
+fn carry_out(sim: &mut Simulator, r: Request) -> String {
+    let result = match r {
+        Request::ForceOutput(p, v) => sim.plc.force_output(p, v),
+        Request::ForceInput(p, v) => sim.plc.force_input(p, v),
+        Request::ReleaseOutput(p) => sim.plc.unforce_output(p),
+        Request::ReleaseInput(p) => sim.plc.unforce_input(p),
+        Request::ReleaseAll => {
+            for p in 0..usize::from(map::POINTS) {
+                let _ = sim.plc.unforce_input(p);
+                let _ = sim.plc.unforce_output(p);
+            }
+            Ok(())
+        }
+    };
+    result
+        .err()
+        .map(|e| format!(" refused: {e}"))
+        .unwrap_or_default()
+}
+
+/// Copies the images, forcing and counters into the Modbus tables.
+fn publish(sim: &Simulator, storage: &mut Storage) {
+    let points = usize::from(map::POINTS);
+    for p in 0..points {
+        storage.discretes[usize::from(map::INPUTS) + p] = sim.plc.inputs().get(p);
+        storage.discretes[usize::from(map::OUTPUT_FORCED) + p] =
+            sim.plc.forced_outputs().forced(p).is_some();
+        storage.discretes[usize::from(map::INPUT_FORCED) + p] =
+            sim.plc.forced_inputs().forced(p).is_some();
+        storage.coils[usize::from(map::OUTPUT_COILS) + p] = sim.plc.outputs().get(p);
+        storage.coils[usize::from(map::INPUT_COILS) + p] =
+            sim.plc.forced_inputs().forced(p).unwrap_or(false);
+    }
+    let st = sim.plc.stats();
+    let t = sim.plant.tally;
+    let clip = |v: u64| u16::try_from(v).unwrap_or(u16::MAX);
+    let wide = |v: u64| {
+        let v = u32::try_from(v).unwrap_or(u32::MAX);
+        [(v >> 16) as u16, v as u16]
+    };
+    let mut values = Vec::with_capacity(usize::from(map::INPUT_REGISTERS));
+    values.extend(wide(u64::from(sim.program.parts().unsigned_abs()))); // 0-1
+    values.push(clip(u64::from(sim.program.jam_et()))); // 2
+    values.extend(wide(st.cycles)); // 3-4
+    values.extend(wide(st.overruns)); // 5-6
+    values.push(clip(u64::from(
+        st.load_per_mille(sim.plc.config().period_us),
+    ))); // 7
+    values.push(clip(sim.program.timers_waiting() as u64)); // 8
+    values.extend(wide(u64::from(t.good_passed))); // 9-10
+    values.extend(wide(u64::from(t.bad_rejected))); // 11-12
+    values.extend(wide(u64::from(t.bad_passed))); // 13-14
+    values.extend(wide(u64::from(t.jams))); // 15-16
+    values.push(clip(u64::from(st.last_us))); // 17
+    values.push(clip(u64::from(st.jitter_us))); // 18
+    storage.inputs[..values.len()].copy_from_slice(&values);
+}
+
+/// Serves one Modbus/TCP client: one MBAP frame at a time.
+fn client(mut stream: TcpStream, state: &Mutex<Shared>) -> Result<(), String> {
+    loop {
+        let mut buf: ModbusFrameBuf = [0; 256];
+        stream
+            .read_exact(&mut buf[..7])
+            .map_err(|e| cli::io_message(&e))?;
+        let length = usize::from(u16::from_be_bytes([buf[4], buf[5]]));
+        if !(2..=250).contains(&length) || buf[2..4] != [0, 0] {
+            return Err(format!("not a Modbus/TCP frame (length {length})"));
+        }
+        stream
+            .read_exact(&mut buf[7..6 + length])
+            .map_err(|e| cli::io_message(&e))?;
+        let unit = buf[6];
+        let function = buf[7];
+        let verdict = if answers_unit(unit) {
+            check(&buf[7..6 + length])
+        } else {
+            Err(GATEWAY_TARGET_FAILED)
+        };
+        if let Err(code) = verdict {
+            stream
+                .write_all(&exception(&buf, function, code))
+                .map_err(|e| cli::io_message(&e))?;
+            continue;
+        }
+        // rmodbus answers unit 1; 0 and 255 are ours too (see answers_unit).
+        buf[6] = 1;
+        let mut response = Vec::new();
+        let mut frame = ModbusFrame::new(1, &buf, ModbusProto::TcpUdp, &mut response);
+        frame
+            .parse()
+            .map_err(|_| "the frame could not be parsed".to_string())?;
+        if frame.processing_required {
+            let mut s = state.lock().map_err(|_| "poisoned".to_string())?;
+            if frame.readonly {
+                frame
+                    .process_read(&s.storage)
+                    .map_err(|_| "the frame could not be processed".to_string())?;
+            } else {
+                frame
+                    .process_write(&mut s.storage)
+                    .map_err(|_| "the frame could not be processed".to_string())?;
+                // Every point the request names acts (module documentation), then the
+                // holding registers, which are commands, read as 0 again.
+                let asked = requests(&buf[7..6 + length]);
+                s.requests.extend(asked);
+                s.storage.holdings[..3].fill(0);
+            }
+        }
+        if frame.response_required {
+            frame
+                .finalize_response()
+                .map_err(|_| "the response could not be made".to_string())?;
+            if let Some(u) = response.get_mut(6) {
+                *u = unit;
+            }
+            stream
+                .write_all(&response)
+                .map_err(|e| cli::io_message(&e))?;
+        }
+    }
+}
