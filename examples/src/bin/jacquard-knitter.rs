@@ -66,8 +66,8 @@ struct Args {
     /// How master and machines talk.
     #[arg(long, value_enum, default_value_t = Transport::Memory)]
     transport: Transport,
-    /// Operator keys, timed: lines `SECONDS KEY` (L, O, S, F, P, T, C M J, N, shift N, break),
-    /// `#` comments.
+    /// Operator keys, timed: lines `SECONDS KEY` (L, O, S, F, P, T, C M J with a job 0–99, N
+    /// for machine N's status, shift N, break), `#` comments; every time within the run.
     #[arg(long, value_name = "FILE")]
     script: Option<PathBuf>,
     /// Answer keys as they come, the run paced in real time (see --speed): typed at a terminal

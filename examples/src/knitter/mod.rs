@@ -1,26 +1,50 @@
-//! The FSW-81 two-level jacquard system (source 001) on `regler-ring-transfer`: one master (the
-//! TRS-80) feeding pattern bytes to knitting-machine boards (the Z-80 single-board computers)
-//! over one link.
+//! The FSW-81 two-level jacquard system (source 001, Tsinghua 1981) on `regler-ring-transfer`:
+//! one master (the TRS-80) feeding pattern bytes to knitting-machine boards (the Z-80
+//! single-board computers) over one link.
 //!
 //! **Model.** A sock machine has `needles` needles per round (default 200) and turns at 120–140
 //! rpm; every needle takes **one pattern byte** (the yarn feed it selects: a colour 0–3), so a
 //! machine at 130 rpm consumes a byte every 60 s / (130 · 200) ≈ 2.31 ms — the source's "about
-//! 2 ms". One round is one row of fabric. Each board has a 256-byte ring (`Slave<256>`). The
-//! master's link is shared: a refill frame of `k` items occupies it for `(9 + k)` byte times;
-//! reports travel on each board's own request line (the source's interrupt) after a short
-//! latency. Both directions lose and duplicate frames at the rates given, from a seeded
-//! generator. A job is a jacquard pattern of `job_rows` rows; `C` queues the next job for a
-//! machine, which starts after the current one.
+//! 2 ms". One round is one row of fabric. Each board has a 256-byte ring (`Slave<256>`). A job
+//! is a jacquard pattern of `job_rows` rows; `C` queues the next job for a machine, which starts
+//! after the current one.
+//!
+//! **Timing.** The master's link is shared: a refill frame of `k` items occupies it for
+//! `(9 + k)` byte times (`byte_ns`, default 3 µs); reports travel on each board's own request
+//! line (the source's interrupt) after 20 µs. Both directions lose and duplicate frames at the
+//! rates given, from a seeded generator. The link's busy figure is the time the refill frames
+//! hold it, over the time run ([`summary::Link`]): in memory that is the simulated link; over
+//! UDP the same frames' time at `byte_ns`, as the sockets' own time is not measured.
+//!
+//! **Files, as the data flows:**
+//! - [`plant`]: the machines' speeds, the jobs' jacquard designs, the ROM's stripes;
+//! - [`boards`]: each machine's board, its ring (`Slave`) and the fabric it knits;
+//! - [`master`]: the jobs and the scheduler (`Master`) that grants refills by deadline;
+//! - [`keys`]: the operator's keys at level 2, from a script, and the keyboard's answers;
+//! - [`memory`]: boards, master and link as one discrete-event simulation (deterministic);
+//! - [`terminal`]: the keys live, typed at a terminal or one a line from a pipe;
+//! - [`udp`]: the same over real datagrams on 127.0.0.1;
+//! - [`summary`]: the run's figures as a table and as JSON;
+//! - [`picture`]: the knitted fabric as a PNG with title, machine labels and legend.
+
+// The modules in the order the data flows (kept apart so that rustfmt keeps that order).
+pub mod plant;
 
 pub mod boards;
-pub mod keys;
+
 pub mod master;
+
+pub mod keys;
+
 pub mod memory;
-pub mod picture;
-pub mod plant;
-pub mod summary;
+
 pub mod terminal;
+
 pub mod udp;
+
+pub mod summary;
+
+pub mod picture;
 
 use std::fmt::Display;
 

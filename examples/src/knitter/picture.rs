@@ -280,6 +280,7 @@ impl Canvas {
         );
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_compression(png::Compression::Best);
         let mut writer = encoder.write_header().map_err(|e| cannot(&e))?;
         writer
             .write_image_data(&self.pixels)

@@ -215,7 +215,7 @@ pub fn summarise(
             "the simulated link".into()
         } else {
             format!(
-                "the refill frames at {} ns per byte (the sockets' own time is not measured)",
+                "the refill frames at {} ns per byte; the sockets' own time is not measured",
                 config.byte_ns
             )
         },
