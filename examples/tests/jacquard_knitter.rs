@@ -169,10 +169,10 @@ fn operator_keys_from_a_script() {
         .map(|l| l.as_str().unwrap())
         .collect();
     let has = |needle: &str| screen.iter().any(|l| l.contains(needle));
-    assert!(has("capacity: Schedulable"), "{screen:?}");
+    assert!(has("capacity: schedulable"), "{screen:?}");
     assert!(has("machine 3: job 7 after the current one"));
     assert!(has("jobs   3: job 2 now, next 7"), "{screen:?}");
-    assert!(has("flow   1: Linked"));
+    assert!(has("flow   1: linked"));
     assert!(has("machine 2: 1"), "the status line of machine 2");
     assert!(has("machine 4: interface re-initialised"));
     assert!(
@@ -189,25 +189,392 @@ fn operator_keys_from_a_script() {
     assert_eq!(total(&r, "underruns"), 0);
 }
 
+/// Every refused argument: exit code 2 and a message naming the option (and, for a range,
+/// its bounds); a script's bad line by its number and what is wrong with it.
 #[test]
-fn bad_arguments_are_named() {
-    for (args, needle) in [
+fn bad_inputs_are_refused_naming_the_option() {
+    let script = |name: &str, text: &str| {
+        let path = temp(name);
+        std::fs::write(&path, text).unwrap();
+        path.to_str().unwrap().to_owned()
+    };
+    let late = script("late.txt", "# a key long after the end\n1 S\n1e300 S\n");
+    let job = script("job.txt", "1 C 1 999\n");
+    let machine = script("machine.txt", "1 shift 9\n");
+    let frob = script("frob.txt", "1 S\n2 frob\n");
+    let time = script("time.txt", "soon S\n");
+    let rows: Vec<(Vec<&str>, Vec<&str>)> = vec![
         (
             vec!["--machines", "0"],
-            "machines must be between 1 and 100",
+            vec!["--machines", "from 1 to 100", "got 0"],
         ),
-        (vec!["--loss", "0.9"], "loss must be a probability"),
-        (vec!["--master-fault", "5"], "START:SECONDS"),
+        (
+            vec!["--machines", "101"],
+            vec!["--machines", "from 1 to 100"],
+        ),
+        (vec!["--needles", "7"], vec!["--needles", "from 8 to 1000"]),
+        (
+            vec!["--seconds", "-1"],
+            vec!["--seconds", "more than 0 and at most 86400", "got -1"],
+        ),
+        (vec!["--seconds", "0"], vec!["--seconds", "more than 0"]),
+        (vec!["--seconds", "1e300"], vec!["--seconds", "got 1e300"]),
+        (vec!["--loss", "0.9"], vec!["--loss", "from 0 to 0.5"]),
+        (
+            vec!["--duplicate", "-0.1"],
+            vec!["--duplicate", "from 0 to 0.5"],
+        ),
+        (vec!["--batch", "65"], vec!["--batch", "from 1 to 64"]),
+        (
+            vec!["--byte-ns", "0"],
+            vec!["--byte-ns", "from 1 to 1000000"],
+        ),
+        (vec!["--job-rows", "0"], vec!["--job-rows", "from 1"]),
+        (
+            vec!["--picture-rows", "0"],
+            vec!["--picture-rows", "from 1 to 100000"],
+        ),
+        (
+            vec!["--master-fault", "5"],
+            vec!["--master-fault", "START:SECONDS"],
+        ),
+        (
+            vec!["--master-fault", "5:0"],
+            vec!["--master-fault", "SECONDS must be more than 0"],
+        ),
+        (
+            vec!["--master-fault", "100:10"],
+            vec![
+                "--master-fault",
+                "at 100 s",
+                "ends at 60 s",
+                "--seconds",
+                "never happens",
+            ],
+        ),
+        (
+            vec!["--seconds", "5", "--script", &late],
+            vec![
+                "--script",
+                "line 3",
+                "1e300 s",
+                "after the run's end at 5 s",
+            ],
+        ),
+        (
+            vec!["--script", &job],
+            vec!["--script", "line 1", "job 999 does not exist", "0 to 99"],
+        ),
+        (
+            vec!["--script", &machine],
+            vec!["--script", "line 1", "no machine 9", "1 to 8"],
+        ),
+        (
+            vec!["--script", &frob],
+            vec![
+                "--script",
+                "line 2",
+                "unknown key 'frob'",
+                "the keys are L (lock)",
+                "break",
+            ],
+        ),
+        (
+            vec!["--script", &time],
+            vec!["--script", "line 1", "the time must be seconds"],
+        ),
+        (
+            vec!["--script", "/nonexistent/keys.txt"],
+            vec!["--script", "cannot read"],
+        ),
+        (vec!["--speed", "2"], vec!["--speed", "--interactive"]),
+        (
+            vec!["--interactive", "--speed", "0"],
+            vec!["--speed", "more than 0"],
+        ),
+        (
+            vec!["--interactive", "--json"],
+            vec!["--interactive", "--json"],
+        ),
+        (
+            vec!["--no-png", "--png", "x.png"],
+            vec!["--no-picture", "--picture"],
+        ),
         (
             vec!["--transport", "udp", "--interactive"],
-            "without a keyboard",
+            vec!["--transport udp", "without a keyboard"],
         ),
+        (
+            vec!["--png", "/nonexistent/dir/k.png", "--seconds", "1"],
+            vec!["cannot write /nonexistent/dir/k.png"],
+        ),
+    ];
+    for (args, needles) in rows {
+        let out = Command::new(env!("CARGO_BIN_EXE_jacquard-knitter"))
+            .args(&args)
+            .arg("-q")
+            .stdin(std::process::Stdio::null())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        for needle in needles {
+            assert!(err.contains(needle), "{args:?}: no {needle:?} in {err}");
+        }
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
+/// The link's busy figure is one computation: the summary and the P key at the end of the run
+/// agree, and over UDP it is a number too (never NaN / null), saying what it measures.
+#[test]
+fn link_busy_is_the_same_everywhere_and_never_nan() {
+    let script = temp("busy.txt");
+    std::fs::write(&script, "5 P\n").unwrap();
+    let r = json(&["--seconds", "5", "--script", script.to_str().unwrap()]);
+    let busy = r["link_busy_percent"].as_f64().unwrap();
+    assert!(busy > 5.0 && busy < 15.0, "{busy}");
+    assert_eq!(r["link_busy_of"], "the simulated link");
+    let line = r["screen"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(Value::as_str)
+        .find(|l| l.contains("link (in memory)"))
+        .unwrap()
+        .to_owned();
+    assert!(
+        line.contains(&format!("busy {busy:.1} %")),
+        "P says {line}, the summary {busy}"
+    );
+    assert!(line.contains("lost 0, duplicated 0"), "{line}");
+
+    let out = knitter(&["--transport", "udp", "--seconds", "1", "--no-picture", "-q"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.contains("NaN"), "{text}");
+    assert!(
+        text.contains(
+            "% (the refill frames at 3000 ns per byte; the sockets' own time is not measured)"
+        ),
+        "{text}"
+    );
+    let r = json(&["--transport", "udp", "--seconds", "1"]);
+    let busy = r["link_busy_percent"].as_f64().unwrap();
+    assert!(busy > 0.0 && busy < 100.0, "{r}");
+}
+
+/// `--interactive` with keys from a pipe: each line is a key, answered in order; a bad line is
+/// answered with what is wrong; the end of the input is Break.
+#[test]
+fn interactive_reads_keys_from_a_pipe_line_by_line() {
+    use std::io::Write;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_jacquard-knitter"))
+        .args([
+            "--interactive",
+            "--seconds",
+            "60",
+            "--no-picture",
+            "--machines",
+            "3",
+        ])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"T\n2\nfrob\nC 3 5\n")
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    for needle in [
+        "keys from stdin, one a line",
+        "parameters: 3 machines",
+        "machine 2: 1",
+        "line 3: unknown key 'frob'; the keys are L (lock)",
+        "machine 3: job 5 after the current one",
+        "break: back to the scheduler",
+        "pattern check: 0 wrong bytes",
+    ] {
+        assert!(text.contains(needle), "no {needle:?} in {text}");
+    }
+}
+
+/// Spawns the knitter with `stdin` as its input, reads one line of its output and closes the
+/// pipe: the program must end quietly (exit 0, no panic, no "Broken pipe").
+fn closes_quietly(args: &[&str], stdin: &[u8]) {
+    use std::io::{BufRead, Write};
+    for _ in 0..3 {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_jacquard-knitter"))
+            .args(args)
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut input = child.stdin.take().unwrap();
+        let data = stdin.to_vec();
+        // The program may end before it read everything: a refused write is no failure here.
+        let writer = std::thread::spawn(move || {
+            let _ = input.write_all(&data);
+        });
+        let mut reader = std::io::BufReader::new(child.stdout.take().unwrap());
+        let mut line = String::new();
+        reader.read_line(&mut line).unwrap();
+        assert!(!line.is_empty(), "{args:?}: no output at all");
+        drop(reader);
+        let out = child.wait_with_output().unwrap();
+        let _ = writer.join();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{args:?}: {:?} {err}", out.status);
+        assert!(
+            !err.contains("panicked") && !err.contains("Broken pipe"),
+            "{args:?}: {err}"
+        );
+        assert!(err.is_empty(), "{args:?}: {err}");
+    }
+}
+
+/// `| head -1` in every output mode: the text summary, JSON, and the interactive answers. Each
+/// writes far more than a pipe holds after the reader has gone (every P answers a dozen lines).
+#[test]
+fn a_closed_pipe_ends_quietly() {
+    let script = temp("pipe.txt");
+    let keys: String = (0..3000)
+        .map(|k| format!("{} P\n", f64::from(k) / 1000.0))
+        .collect();
+    std::fs::write(&script, keys).unwrap();
+    let script = script.to_str().unwrap();
+    closes_quietly(&["--seconds", "3", "--no-picture", "--script", script], b"");
+    closes_quietly(
+        &[
+            "--seconds",
+            "3",
+            "--no-picture",
+            "--json",
+            "--script",
+            script,
+        ],
+        b"",
+    );
+    closes_quietly(
+        &[
+            "--interactive",
+            "--seconds",
+            "30",
+            "--no-picture",
+            "--machines",
+            "2",
+        ],
+        "P\n".repeat(3000).as_bytes(),
+    );
+}
+
+/// No Rust `Debug` text reaches the user: not in the summary, the JSON, the operator's answers
+/// or the messages of a refused run.
+#[test]
+fn no_debug_text_reaches_the_user() {
+    let script = temp("debug.txt");
+    std::fs::write(&script, "1 T\n1 S\n1 2\n2 P\n").unwrap();
+    let script = script.to_str().unwrap();
+    let mut outputs = Vec::new();
+    for args in [
+        vec!["--seconds", "3", "--no-picture", "--script", script],
+        vec![
+            "--seconds",
+            "3",
+            "--no-picture",
+            "--json",
+            "--script",
+            script,
+        ],
+        vec!["--seconds", "1", "--no-picture", "--transport", "udp"],
+        vec![
+            "--seconds",
+            "1",
+            "--no-picture",
+            "--transport",
+            "udp",
+            "--json",
+        ],
+        vec!["--master-fault", "100:10"],
+        vec!["--png", "/nonexistent/dir/k.png", "--seconds", "1"],
+        vec!["--script", "/nonexistent/keys.txt"],
     ] {
         let out = knitter(&args);
-        assert_eq!(out.status.code(), Some(2), "{args:?}");
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.contains(needle), "{args:?}: {err}");
+        outputs.push((
+            args.join(" "),
+            String::from_utf8_lossy(&out.stdout).to_string(),
+        ));
+        outputs.push((
+            args.join(" "),
+            String::from_utf8_lossy(&out.stderr).to_string(),
+        ));
     }
+    for (args, text) in outputs {
+        for debug in [
+            " { ",
+            "Some(",
+            "None",
+            "Ok(",
+            "Err(",
+            "\"Ok\":",
+            "Custom {",
+            "kind:",
+            "NaN",
+            "(Linked)",
+            "StandAlone",
+            "Schedulable",
+            "Overloaded",
+            "utilisation_ppm",
+        ] {
+            assert!(!text.contains(debug), "{args}: {debug:?} in {text}");
+        }
+    }
+}
+
+/// The picture says what it is: a title band with text above the fabric, a legend below.
+#[test]
+fn the_picture_has_a_title_and_a_legend() {
+    let path = temp("titled.png");
+    let out = knitter(&["--seconds", "3", "-q", "--picture", path.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut pixels = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut pixels).unwrap();
+    let (w, h) = (info.width as usize, info.height as usize);
+    let ink = |y0: usize, y1: usize| {
+        (y0..y1).any(|y| (0..w).any(|x| pixels[(y * w + x) * 3..][..3] == [20, 20, 20]))
+    };
+    assert!(ink(16, 30), "title line");
+    assert!(ink(h - 40, h - 16), "legend");
+    // The stripes and the yarns: never the colour that marks a missed byte.
+    let magenta = (0..w * h)
+        .filter(|&p| pixels[p * 3..][..3] == [255, 0, 255])
+        .count();
+    assert_eq!(
+        magenta,
+        2 * 12 * 12,
+        "only the legend's two swatches: no byte was missed"
+    );
 }
 
 #[test]
@@ -236,9 +603,14 @@ fn eight_machines_over_udp_lose_no_row() {
 
 /// At a terminal: keys answered as they are typed (run by `.ci/run`, which installs tmux).
 #[test]
-#[ignore = "needs tmux"]
+#[ignore = "runs the program in a tmux session (needs tmux and a few seconds of real time): cargo test -p regler-examples -- --ignored"]
 fn interactive_under_tmux_answers_each_key() {
     use std::time::{Duration, Instant};
+    assert!(
+        Command::new("tmux").arg("-V").output().is_ok(),
+        "tmux not found: this test runs the program in a tmux session; install tmux \
+         (apt-get install tmux) and run: cargo test -p regler-examples -- --ignored"
+    );
     let session = format!("regler-jk-{}", std::process::id());
     let tmux = |args: &[&str]| {
         let out = Command::new("tmux").args(args).output().unwrap();
@@ -280,7 +652,7 @@ fn interactive_under_tmux_answers_each_key() {
     while !linked && start.elapsed() < Duration::from_secs(10) {
         tmux(&["send-keys", "-t", &session, "s"]);
         std::thread::sleep(Duration::from_millis(300));
-        linked = screen().contains("flow   3: Linked");
+        linked = screen().contains("flow   3: linked");
     }
     assert!(linked, "{}", screen());
     tmux(&["send-keys", "-t", &session, "2"]);
@@ -332,7 +704,12 @@ fn silence_is_capped_by_the_counter_drift() {
     }
     let out = knitter(&["--silence", "100000", "--no-picture"]);
     assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("silence must be 1..=32311"));
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("--silence: must be from 1 to 32311"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 /// Consecutive starts of a machine never share a boot number, for any seed and machine.
