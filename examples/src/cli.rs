@@ -29,6 +29,26 @@ pub trait Program: Clone + Send + Sync + 'static {
     const NO_FORMAT: &'static str;
 }
 
+/// Declares a program's type and its [`Program`] defaults in one line:
+/// `regler_examples::program!(Highway, "serial-highway", seed 1976, picture "serial-highway.svg", "svg");`
+/// (the last is the picture's format, also accepted as an option name: `--svg` / `--no-svg`).
+#[macro_export]
+macro_rules! program {
+    ($ty:ident, $name:literal, seed $seed:literal, picture $picture:literal, $format:literal) => {
+        /// The program's name and defaults for the shared options.
+        #[derive(Debug, Clone)]
+        struct $ty;
+
+        impl $crate::cli::Program for $ty {
+            const NAME: &'static str = $name;
+            const SEED: u64 = $seed;
+            const PICTURE: &'static str = $picture;
+            const FORMAT: &'static str = $format;
+            const NO_FORMAT: &'static str = concat!("no-", $format);
+        }
+    };
+}
+
 /// The options every example program takes, flattened into its own (`#[command(flatten)]`).
 #[derive(Debug, Clone, clap::Args)]
 pub struct Common<P: Program> {

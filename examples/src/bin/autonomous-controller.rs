@@ -91,17 +91,7 @@ struct Args {
     common: Common<Controller>,
 }
 
-/// The program's name and defaults for the shared options.
-#[derive(Debug, Clone)]
-struct Controller;
-
-impl Program for Controller {
-    const NAME: &'static str = "autonomous-controller";
-    const SEED: u64 = 1985;
-    const PICTURE: &'static str = "autonomous-controller.svg";
-    const FORMAT: &'static str = "svg";
-    const NO_FORMAT: &'static str = "no-svg";
-}
+regler_examples::program!(Controller, "autonomous-controller", seed 1985, picture "autonomous-controller.svg", "svg");
 
 fn main() -> ExitCode {
     cli::finish(Controller::NAME, run(&Args::parse()))

@@ -86,17 +86,7 @@ struct Args {
     common: Common<Knitter>,
 }
 
-/// The program's name and defaults for the shared options.
-#[derive(Debug, Clone)]
-struct Knitter;
-
-impl Program for Knitter {
-    const NAME: &'static str = "jacquard-knitter";
-    const SEED: u64 = 1981;
-    const PICTURE: &'static str = "jacquard-knitter.png";
-    const FORMAT: &'static str = "png";
-    const NO_FORMAT: &'static str = "no-png";
-}
+regler_examples::program!(Knitter, "jacquard-knitter", seed 1981, picture "jacquard-knitter.png", "png");
 
 fn parse_fault(text: &str) -> Result<(f64, f64), String> {
     let (a, b) = text

@@ -83,17 +83,7 @@ struct Args {
     common: Common<Mailbag>,
 }
 
-/// The program's name and defaults for the shared options.
-#[derive(Debug, Clone)]
-struct Mailbag;
-
-impl Program for Mailbag {
-    const NAME: &'static str = "mailbag-sorter";
-    const SEED: u64 = 1977;
-    const PICTURE: &'static str = "mailbag-sorter.svg";
-    const FORMAT: &'static str = "svg";
-    const NO_FORMAT: &'static str = "no-svg";
-}
+regler_examples::program!(Mailbag, "mailbag-sorter", seed 1977, picture "mailbag-sorter.svg", "svg");
 
 impl Args {
     fn config(&self) -> Config {

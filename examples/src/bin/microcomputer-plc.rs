@@ -65,17 +65,7 @@ struct Args {
     common: Common<Plc>,
 }
 
-/// The program's name and defaults for the shared options.
-#[derive(Debug, Clone)]
-struct Plc;
-
-impl Program for Plc {
-    const NAME: &'static str = "microcomputer-plc";
-    const SEED: u64 = 1989;
-    const PICTURE: &'static str = "microcomputer-plc.svg";
-    const FORMAT: &'static str = "svg";
-    const NO_FORMAT: &'static str = "no-svg";
-}
+regler_examples::program!(Plc, "microcomputer-plc", seed 1989, picture "microcomputer-plc.svg", "svg");
 
 fn main() -> ExitCode {
     cli::finish(Plc::NAME, run(&Args::parse()))

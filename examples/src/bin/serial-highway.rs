@@ -75,17 +75,7 @@ struct Args {
     common: Common<Highway>,
 }
 
-/// The program's name and defaults for the shared options.
-#[derive(Debug, Clone)]
-struct Highway;
-
-impl Program for Highway {
-    const NAME: &'static str = "serial-highway";
-    const SEED: u64 = 1976;
-    const PICTURE: &'static str = "serial-highway.svg";
-    const FORMAT: &'static str = "svg";
-    const NO_FORMAT: &'static str = "no-svg";
-}
+regler_examples::program!(Highway, "serial-highway", seed 1976, picture "serial-highway.svg", "svg");
 
 fn main() -> ExitCode {
     cli::finish(Highway::NAME, run(&Args::parse()))
