@@ -1,5 +1,7 @@
 //! End-to-end: the `autonomous-controller` binary, driven by scripts and by stdin.
 
+mod common;
+
 use std::io::Write;
 use std::process::{Command, Stdio};
 
@@ -588,7 +590,6 @@ fn a_refused_script_answer_is_named() {
 /// holds after the reader has gone).
 #[test]
 fn a_closed_pipe_ends_quietly() {
-    use std::io::Read;
     let interactive_input = format!("{TANK_ANSWERS}{}quit\n", "\n".repeat(20_000));
     // The text summary is short: a transcript of 4 000 status requests makes it long.
     let answers: String = TANK_ANSWERS
@@ -640,33 +641,11 @@ fn a_closed_pipe_ends_quietly() {
         ),
     ];
     for (args, input) in cases {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_autonomous-controller"))
-            .args(&args)
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let mut stdin = child.stdin.take().unwrap();
-        let writer = input.map(|text| {
-            let text = text.to_owned();
-            std::thread::spawn(move || {
-                let _ = stdin.write_all(text.as_bytes());
-            })
-        });
-        let mut stdout = child.stdout.take().unwrap();
-        let mut byte = [0u8; 1];
-        stdout.read_exact(&mut byte).unwrap();
-        drop(stdout);
-        let out = child.wait_with_output().unwrap();
-        if let Some(w) = writer {
-            let _ = w.join();
-        }
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(out.status.success(), "{args:?}: {:?} {err}", out.status);
-        assert!(
-            !err.contains("panicked") && !err.contains("Broken pipe"),
-            "{args:?}: {err}"
+        common::closes_quietly(
+            env!("CARGO_BIN_EXE_autonomous-controller"),
+            &args,
+            input.unwrap_or("").as_bytes(),
+            common::Close::AfterAByte,
         );
     }
 }
@@ -780,12 +759,11 @@ fn no_debug_text_reaches_the_user() {
             String::from_utf8_lossy(&out.stdout),
             String::from_utf8_lossy(&out.stderr)
         );
-        for debug in [
-            "Some(", "Ok(", "Err(", "\"Ok\":", "\"Err\":", "Custom {", "kind:", "Room", "Tank",
-            "Terminal", "Keypad", " {:?}",
-        ] {
-            assert!(!text.contains(debug), "{args:?}: {debug:?} in\n{text}");
-        }
+        common::assert_no_debug_text(
+            &args.join(" "),
+            &text,
+            &["Room", "Tank", "Terminal", "Keypad", " {:?}"],
+        );
     }
     let bench = controller(&["--tuning-benchmark", "--json"]);
     let text = String::from_utf8_lossy(&bench.stdout);

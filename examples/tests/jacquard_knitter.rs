@@ -1,6 +1,8 @@
 //! End-to-end: the `jacquard-knitter` binary in memory, with faults, with operator keys, over
 //! real UDP sockets, and at a real terminal.
 
+mod common;
+
 use std::process::Command;
 
 use serde_json::Value;
@@ -416,35 +418,13 @@ fn interactive_reads_keys_from_a_pipe_line_by_line() {
 /// Spawns the knitter with `stdin` as its input, reads one line of its output and closes the
 /// pipe: the program must end quietly (exit 0, no panic, no "Broken pipe").
 fn closes_quietly(args: &[&str], stdin: &[u8]) {
-    use std::io::{BufRead, Write};
     for _ in 0..3 {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_jacquard-knitter"))
-            .args(args)
-            .stdin(std::process::Stdio::piped())
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap();
-        let mut input = child.stdin.take().unwrap();
-        let data = stdin.to_vec();
-        // The program may end before it read everything: a refused write is no failure here.
-        let writer = std::thread::spawn(move || {
-            let _ = input.write_all(&data);
-        });
-        let mut reader = std::io::BufReader::new(child.stdout.take().unwrap());
-        let mut line = String::new();
-        reader.read_line(&mut line).unwrap();
-        assert!(!line.is_empty(), "{args:?}: no output at all");
-        drop(reader);
-        let out = child.wait_with_output().unwrap();
-        let _ = writer.join();
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(out.status.success(), "{args:?}: {:?} {err}", out.status);
-        assert!(
-            !err.contains("panicked") && !err.contains("Broken pipe"),
-            "{args:?}: {err}"
+        common::closes_quietly(
+            env!("CARGO_BIN_EXE_jacquard-knitter"),
+            args,
+            stdin,
+            common::Close::AfterALine,
         );
-        assert!(err.is_empty(), "{args:?}: {err}");
     }
 }
 
@@ -525,24 +505,18 @@ fn no_debug_text_reaches_the_user() {
         ));
     }
     for (args, text) in outputs {
-        for debug in [
-            " { ",
-            "Some(",
-            "None",
-            "Ok(",
-            "Err(",
-            "\"Ok\":",
-            "Custom {",
-            "kind:",
-            "NaN",
-            "(Linked)",
-            "StandAlone",
-            "Schedulable",
-            "Overloaded",
-            "utilisation_ppm",
-        ] {
-            assert!(!text.contains(debug), "{args}: {debug:?} in {text}");
-        }
+        common::assert_no_debug_text(
+            &args,
+            &text,
+            &[
+                "NaN",
+                "(Linked)",
+                "StandAlone",
+                "Schedulable",
+                "Overloaded",
+                "utilisation_ppm",
+            ],
+        );
     }
 }
 

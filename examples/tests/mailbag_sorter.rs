@@ -1,5 +1,7 @@
 //! End-to-end: the `mailbag-sorter` binary and its simulation, in short seeded runs.
 
+mod common;
+
 use std::process::Command;
 
 use regler_examples::mailbag::{self, Config};
@@ -216,20 +218,7 @@ fn a_short_chain_runs() {
 
 /// What a user reads never shows Rust's debug formatting.
 fn assert_no_debug_text(text: &str) {
-    for bad in [
-        "Some(",
-        "None",
-        "Ok(",
-        "Err(",
-        "\"Ok\":",
-        "Custom {",
-        " { ",
-        "Majority",
-        "Consecutive",
-        "0e0",
-    ] {
-        assert!(!text.contains(bad), "debug text {bad:?} in: {text}");
-    }
+    common::assert_no_debug_text("output", text, &["Majority", "Consecutive", "0e0"]);
 }
 
 #[test]
@@ -266,8 +255,6 @@ fn no_debug_text_reaches_the_user() {
 /// line.
 #[test]
 fn a_closed_pipe_ends_quietly() {
-    use std::io::{BufRead, BufReader};
-    use std::process::Stdio;
     let dir = std::env::temp_dir().join(format!("regler-mailbag-pipe-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let svg = dir.join("m.svg");
@@ -278,29 +265,13 @@ fn a_closed_pipe_ends_quietly() {
         &["--json", "--no-svg"],
         &["--json", "--svg", svg],
     ] {
-        for read_a_line in [false, true] {
-            let mut child = Command::new(env!("CARGO_BIN_EXE_mailbag-sorter"))
-                .args([&["--years", "0.05", "-q"], mode].concat())
-                .stdout(Stdio::piped())
-                .stderr(Stdio::piped())
-                .spawn()
-                .unwrap();
-            let stdout = child.stdout.take().unwrap();
-            if read_a_line {
-                let mut line = String::new();
-                BufReader::new(stdout).read_line(&mut line).unwrap();
-                assert!(!line.is_empty(), "{mode:?}");
-            } else {
-                drop(stdout);
-            }
-            let out = child.wait_with_output().unwrap();
-            let err = String::from_utf8_lossy(&out.stderr);
-            assert!(
-                out.status.success(),
-                "{mode:?} {read_a_line}: {:?} {err}",
-                out.status
+        for close in [common::Close::AtOnce, common::Close::AfterALine] {
+            common::closes_quietly(
+                env!("CARGO_BIN_EXE_mailbag-sorter"),
+                &[&["--years", "0.05", "-q"], mode].concat(),
+                b"",
+                close,
             );
-            assert!(err.is_empty(), "{mode:?} {read_a_line}: {err}");
         }
     }
     std::fs::remove_dir_all(&dir).ok();

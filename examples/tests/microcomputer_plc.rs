@@ -1,5 +1,7 @@
 //! End-to-end: the `microcomputer-plc` binary, by script, by stdin, and over Modbus/TCP.
 
+mod common;
+
 use std::io::{BufRead, BufReader, Write};
 use std::process::{Command, Stdio};
 
@@ -676,32 +678,11 @@ fn a_closed_pipe_ends_quietly() {
         (&["--interactive", "--no-svg", "-q"], &stdin_commands),
     ];
     for (args, stdin) in modes {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_microcomputer-plc"))
-            .args(args)
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let mut input = child.stdin.take().unwrap();
-        let feeder = {
-            let stdin = stdin.to_string();
-            std::thread::spawn(move || {
-                let _ = input.write_all(stdin.as_bytes());
-            })
-        };
-        let mut line = String::new();
-        BufReader::new(child.stdout.take().unwrap())
-            .read_line(&mut line)
-            .unwrap();
-        assert!(!line.is_empty(), "{args:?}");
-        let out = child.wait_with_output().unwrap();
-        feeder.join().unwrap();
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(out.status.success(), "{args:?}: {:?} {err}", out.status);
-        assert!(
-            !err.contains("panicked") && !err.contains("Broken pipe"),
-            "{args:?}: {err}"
+        common::closes_quietly(
+            env!("CARGO_BIN_EXE_microcomputer-plc"),
+            args,
+            stdin.as_bytes(),
+            common::Close::AfterALine,
         );
     }
     std::fs::remove_dir_all(&dir).unwrap();
@@ -736,28 +717,12 @@ fn the_issue_pipes_into_head_end_quietly() {
 }
 
 /// Debug formatting that must never reach a user.
-const DEBUG_TEXT: [&str; 12] = [
-    "Some(",
-    "None",
-    "Ok(",
-    "Err(",
-    "\"Ok\":",
-    "Custom {",
-    " { ",
-    "Batch(",
-    "Shift(",
-    "OutputOn(",
-    "ForceOutput(",
-    "Cycle(",
-];
-
 fn assert_no_debug(what: &str, text: &str) {
-    for debug in DEBUG_TEXT {
-        assert!(
-            !text.contains(debug),
-            "{what}: debug text {debug:?} in\n{text}"
-        );
-    }
+    common::assert_no_debug_text(
+        what,
+        text,
+        &["Batch(", "Shift(", "OutputOn(", "ForceOutput(", "Cycle("],
+    );
 }
 
 /// No user-facing output shows Rust `Debug` text: the demonstration, its JSON, the monitor's
