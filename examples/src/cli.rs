@@ -53,7 +53,8 @@ macro_rules! program {
 #[derive(Debug, Clone, clap::Args)]
 pub struct Common<P: Program> {
     /// Seed of the run: the same seed gives the same run, figure for figure.
-    #[arg(long, default_value_t = P::SEED)]
+    #[arg(long, default_value_t = P::SEED, allow_hyphen_values = true,
+          value_parser = whole(0, u64::MAX))]
     pub seed: u64,
     /// Print the results as JSON on stdout (for machines) instead of the text summary.
     #[arg(long)]
@@ -260,6 +261,27 @@ pub fn finish(program: &str, result: Result<(), Stop>) -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+/// Writes the picture to `path`; a failure names the option and the path in the one wording
+/// every program uses (`--picture: cannot write PATH: why`).
+///
+/// # Errors
+/// [`Stop::Error`] when the file cannot be written.
+pub fn write_picture(path: &Path, bytes: impl AsRef<[u8]>) -> Result<(), Stop> {
+    std::fs::write(path, bytes).map_err(|e| {
+        bad(
+            "--picture",
+            format!("cannot write {}: {}", path.display(), io_message(&e)),
+        )
+    })
+}
+
+/// What a user typed, for a message: as typed, or its first characters and `…` when it is long
+/// (a 10 MB script line is not echoed whole).
+#[must_use]
+pub fn excerpt(s: &str) -> String {
+    shown(s)
 }
 
 /// A refusal of `option`'s value, in the one style every program uses (`--crates: must be from

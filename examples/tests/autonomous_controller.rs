@@ -724,7 +724,7 @@ fn bad_arguments_are_refused_naming_the_option() {
         (vec!["--script", &not_text], vec!["--script", "UTF-8"]),
         (
             vec!["--svg", "/nonexistent/dir/a.svg", "--hours", "0.1"],
-            vec!["--svg", "cannot write"],
+            vec!["--picture", "cannot write", "/nonexistent/dir/a.svg"],
         ),
     ];
     for (args, needles) in rows {

@@ -195,12 +195,7 @@ fn run(args: &Args) -> Result<(), Stop> {
 /// Writes the picture when there is to be one.
 fn write_picture(path: Option<&std::path::Path>, svg: impl FnOnce() -> String) -> Result<(), Stop> {
     if let Some(path) = path {
-        std::fs::write(path, svg()).map_err(|e| {
-            cli::bad(
-                "--svg",
-                format!("cannot write {}: {}", path.display(), cli::io_message(&e)),
-            )
-        })?;
+        cli::write_picture(path, svg())?;
     }
     Ok(())
 }

@@ -126,8 +126,7 @@ fn run(args: &Args) -> Result<(), Stop> {
     bar.finish_and_clear();
     let picture = args.common.picture();
     if let Some(path) = picture {
-        std::fs::write(path, mailbag::picture(&report))
-            .map_err(|e| format!("cannot write {}: {}", path.display(), cli::io_message(&e)))?;
+        cli::write_picture(path, mailbag::picture(&report))?;
     }
     if args.common.json {
         cli::print(&serde_json::to_string_pretty(&report)?)

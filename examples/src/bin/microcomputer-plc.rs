@@ -113,12 +113,7 @@ fn finish(args: &Args, sim: &Simulator, mut t: Transcript) -> Result<(), Stop> {
     let picture = args.common.picture();
     if let Some(path) = picture {
         let svg = picture::timing_diagram(sim, &args.signals, args.window, args.common.seed);
-        std::fs::write(path, svg).map_err(|e| {
-            cli::bad(
-                "--picture",
-                format!("cannot write {}: {}", path.display(), cli::io_message(&e)),
-            )
-        })?;
+        cli::write_picture(path, svg)?;
     }
     if args.common.json {
         let summary = Summary::new(sim, args.common.seed, std::mem::take(&mut t.log));

@@ -129,8 +129,7 @@ fn run(args: &Args) -> Result<(), Stop> {
     let summary = highway::run(config, script, |done| bar.set_position(done))?;
     bar.finish_and_clear();
     if let Some(path) = args.common.picture() {
-        std::fs::write(path, highway::picture(&summary))
-            .map_err(|e| format!("cannot write {}: {}", path.display(), cli::io_message(&e)))?;
+        cli::write_picture(path, highway::picture(&summary))?;
     }
     if args.common.json {
         cli::print(&serde_json::to_string_pretty(&summary)?)

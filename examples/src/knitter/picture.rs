@@ -45,13 +45,13 @@ const MARGIN: usize = 16;
 /// each column says where each row came from. Title, machine labels and legend as text.
 ///
 /// # Errors
-/// An I/O or encoding error, as text.
+/// An I/O or encoding error, naming `--picture` and the path.
 pub fn write_png(
     path: &Path,
     summary: &Summary,
     boards: &[Board],
     max_rows: usize,
-) -> Result<(), String> {
+) -> Result<(), crate::cli::Stop> {
     let needles = boards.first().map_or(0, |b| usize::from(b.needles()));
     let rows = boards
         .iter()
@@ -270,11 +270,11 @@ impl Canvas {
         }
     }
 
-    fn write(&self, path: &Path) -> Result<(), String> {
-        let cannot = |e: &dyn std::fmt::Display| format!("cannot write {}: {e}", path.display());
-        let file = std::fs::File::create(path).map_err(|e| cannot(&crate::cli::io_message(&e)))?;
+    fn write(&self, path: &Path) -> Result<(), crate::cli::Stop> {
+        let cannot = |e: &dyn std::fmt::Display| format!("cannot encode the picture: {e}");
+        let mut png = Vec::new();
         let mut encoder = png::Encoder::new(
-            std::io::BufWriter::new(file),
+            &mut png,
             u32::try_from(self.width).map_err(|_| "the picture is too wide")?,
             u32::try_from(self.height).map_err(|_| "the picture is too high")?,
         );
@@ -285,7 +285,8 @@ impl Canvas {
         writer
             .write_image_data(&self.pixels)
             .map_err(|e| cannot(&e))?;
-        writer.finish().map_err(|e| cannot(&e))
+        writer.finish().map_err(|e| cannot(&e))?;
+        crate::cli::write_picture(path, png)
     }
 }
 
