@@ -122,6 +122,11 @@ fn bad_input_is_refused_naming_the_option() {
         (&["--years", "1e300"], &["--years", "got 1e300"]),
         (&["--docks", "0"], &["--docks", "from 1 to 8", "got 0"]),
         (
+            &["--strategy", "-inf"],
+            &["--strategy", "majority, consecutive"],
+        ),
+        (&["--seed", "-1"], &["--seed", "got -1"]),
+        (
             &["--docks", "many"],
             &["--docks", "whole number", "got many"],
         ),

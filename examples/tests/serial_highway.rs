@@ -119,6 +119,8 @@ fn bad_arguments_are_refused_naming_the_option() {
         (&["--crates", "-3"], &["--crates", "from 1 to 62", "got -3"]),
         (&["--ber", "0.7"], &["--ber", "from 0 to 0.1", "got 0.7"]),
         (&["--ber", "-1"], &["--ber", "from 0 to 0.1", "got -1"]),
+        (&["--line", "-1"], &["--line", "byte-serial, bit-serial"]),
+        (&["--seed", "-1"], &["--seed", "got -1"]),
         (&["--ber", "nan"], &["--ber", "finite"]),
         (&["--window", "0"], &["--window", "from 1 to 16"]),
         (&["--window", "17"], &["--window", "from 1 to 16"]),

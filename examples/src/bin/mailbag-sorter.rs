@@ -63,7 +63,7 @@ struct Args {
           value_parser = cli::whole(READINGS.0, READINGS.1))]
     readings: u8,
     /// Voting strategy.
-    #[arg(long, value_enum, default_value_t = StrategyArg::Majority)]
+    #[arg(long, value_enum, default_value_t = StrategyArg::Majority, allow_hyphen_values = true)]
     strategy: StrategyArg,
     /// Scans with cams (majority) or consecutive equal decodes (consecutive) needed (1 to
     /// --readings).

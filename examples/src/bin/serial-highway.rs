@@ -41,7 +41,7 @@ struct Args {
           value_parser = cli::real(0.0, MAX_BER))]
     ber: f64,
     /// Line encoding the noise acts on.
-    #[arg(long, value_enum, default_value_t = Line::ByteSerial)]
+    #[arg(long, value_enum, default_value_t = Line::ByteSerial, allow_hyphen_values = true)]
     line: Line,
     /// Commands in flight at most: one per crate, so 1 to 16 and at most --crates [default: 16,
     /// or --crates when fewer]
@@ -54,7 +54,7 @@ struct Args {
     retries: u8,
     /// A scripted workload instead of the random one: lines `CRATE STATION SUBADDRESS FUNCTION
     /// [DATA]` (e.g. `5 1 0 16 0x1234` writes, `5 1 0 0` reads back), run in order, over and over.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     script: Option<PathBuf>,
     /// Bit-serial bit rate in bit/s for the throughput figure (1000 to 100000000).
     #[arg(long, default_value_t = 5e6, allow_hyphen_values = true,
