@@ -142,6 +142,18 @@ fn bad_inputs_are_refused_naming_the_option() {
             &["--seconds", "5"],
             &["--seconds", "only applies with --modbus"],
         ),
+        (
+            &["--idle-timeout", "5"],
+            &["--idle-timeout", "only applies with --modbus"],
+        ),
+        (
+            &["--idle-timeout", "0", "--modbus", "127.0.0.1:0"],
+            &["--idle-timeout", "more than 0"],
+        ),
+        (
+            &["--idle-timeout", "1e300", "--modbus", "127.0.0.1:0"],
+            &["--idle-timeout", "at most 86400"],
+        ),
         (&["--seed", "-1"], &["--seed"]),
         (
             &["--script", "/nonexistent"],
@@ -806,5 +818,220 @@ fn monitor_messages_say_what_happened() {
     );
     // The demonstration ends with `stats`: printed once.
     let demo = String::from_utf8(plc(&["--no-svg"]).stdout).unwrap();
-    assert_eq!(demo.matches("cycles 4493  busy").count(), 1, "{demo}");
+    assert_eq!(demo.matches("cycles 4571  busy").count(), 1, "{demo}");
+}
+
+/// The PLC serving Modbus/TCP with `extra` options; its child and address.
+fn modbus_server_with(seconds: &str, extra: &[&str]) -> (std::process::Child, String) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_microcomputer-plc"))
+        .args([
+            "--modbus",
+            "127.0.0.1:0",
+            "--seconds",
+            seconds,
+            "--json",
+            "--no-svg",
+        ])
+        .args(extra)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stderr.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let address = line.split_whitespace().nth(2).unwrap().to_string();
+    (child, address)
+}
+
+/// Sends one frame with MBAP length `length` (unit id 1 and `pdu`); the reply's PDU, or `None`
+/// if the server closed the connection.
+fn raw_frame(s: &mut std::net::TcpStream, length: u16, pdu: &[u8]) -> Option<Vec<u8>> {
+    use std::io::Read;
+    let mut frame = vec![0x12, 0x34, 0, 0];
+    frame.extend_from_slice(&length.to_be_bytes());
+    frame.push(1);
+    frame.extend_from_slice(pdu);
+    s.write_all(&frame).ok()?;
+    let mut head = [0u8; 7];
+    s.read_exact(&mut head).ok()?;
+    let mut body = vec![0u8; usize::from(u16::from_be_bytes([head[4], head[5]])) - 1];
+    s.read_exact(&mut body).ok()?;
+    Some(body)
+}
+
+/// The largest writes the specification allows (an ADU of 260 bytes, MBAP length 254) are
+/// answered with an exception, not a closed connection; a longer frame closes it.
+#[test]
+fn modbus_legal_size_writes_get_exceptions() {
+    let (child, address) = modbus_server_with("4", &[]);
+    let mut s = std::net::TcpStream::connect(&address).unwrap();
+    s.set_read_timeout(Some(std::time::Duration::from_secs(3)))
+        .unwrap();
+    let write = |f: u8, quantity: u16, bytes: u8| {
+        let mut pdu = vec![f, 0, 0];
+        pdu.extend_from_slice(&quantity.to_be_bytes());
+        pdu.push(bytes);
+        pdu.extend(std::iter::repeat_n(0, usize::from(bytes)));
+        pdu
+    };
+    for (pdu, want) in [
+        (write(15, 1968, 246), [0x8F, 2]), // length 253: past the map
+        (write(16, 123, 246), [0x90, 2]),  // length 253: past the map
+        (write(15, 1969, 247), [0x8F, 3]), // length 254: too many coils
+    ] {
+        let length = u16::try_from(pdu.len() + 1).unwrap();
+        assert_eq!(
+            raw_frame(&mut s, length, &pdu),
+            Some(want.to_vec()),
+            "function {} length {length}",
+            pdu[0]
+        );
+    }
+    // fc16 with 124 registers and byte count 248 is 254 bytes of PDU: one more than an ADU
+    // holds, so it is framed here with the largest length, and its byte count says 3.
+    let mut pdu = write(16, 124, 248);
+    pdu.truncate(253);
+    assert_eq!(raw_frame(&mut s, 254, &pdu), Some(vec![0x90, 3]));
+    // Above 254 the connection is closed.
+    let mut big = vec![4];
+    big.extend(std::iter::repeat_n(0, 254));
+    assert_eq!(raw_frame(&mut s, 255, &big), None, "length 255");
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success());
+}
+
+/// The function code is checked first: a function not served is exception 1 whatever follows
+/// it (even nothing); a served one with too little or too much data is exception 3.
+#[test]
+fn modbus_function_code_is_checked_first() {
+    let (child, address) = modbus_server_with("6", &[]);
+    let mut s = std::net::TcpStream::connect(&address).unwrap();
+    s.set_read_timeout(Some(std::time::Duration::from_secs(3)))
+        .unwrap();
+    let body = [0u8, 0, 0, 1, 2];
+    for f in 0..=255u8 {
+        for n in 0..=5 {
+            let mut pdu = vec![f];
+            pdu.extend_from_slice(&body[..n]);
+            let reply = raw_frame(&mut s, u16::try_from(n + 2).unwrap(), &pdu)
+                .unwrap_or_else(|| panic!("function {f:#04x}, {n} bytes: connection closed"));
+            let served = matches!(f, 1..=6 | 15 | 16);
+            if !served {
+                assert_eq!(reply, vec![f | 0x80, 1], "function {f:#04x}, {n} bytes");
+            } else if n == 4 && matches!(f, 1..=4 | 6) {
+                assert_eq!(reply[0], f, "function {f:#04x}, {n} bytes: {reply:?}");
+            } else {
+                assert_eq!(reply, vec![f | 0x80, 3], "function {f:#04x}, {n} bytes");
+            }
+        }
+    }
+    drop(s);
+    assert!(child.wait_with_output().unwrap().status.success());
+}
+
+/// At most 16 clients at once: one more is closed at once; a client silent for the idle
+/// timeout is closed, and then a new client is answered. The summary counts them.
+#[test]
+fn modbus_clients_are_capped_and_idle_ones_closed() {
+    use std::io::Read;
+    let (child, address) = modbus_server_with("6", &["--idle-timeout", "2"]);
+    let idle: Vec<_> = (0..16)
+        .map(|_| std::net::TcpStream::connect(&address).unwrap())
+        .collect();
+    std::thread::sleep(std::time::Duration::from_millis(200));
+    let started = std::time::Instant::now();
+    let mut extra = std::net::TcpStream::connect(&address).unwrap();
+    extra
+        .set_read_timeout(Some(std::time::Duration::from_secs(5)))
+        .unwrap();
+    let mut byte = [0u8; 1];
+    assert!(
+        matches!(extra.read(&mut byte), Ok(0) | Err(_)),
+        "the 17th client is closed"
+    );
+    assert!(
+        started.elapsed() < std::time::Duration::from_secs(1),
+        "at once, not after the idle timeout: {:?}",
+        started.elapsed()
+    );
+    std::thread::sleep(std::time::Duration::from_millis(2500));
+    let mut s = std::net::TcpStream::connect(&address).unwrap();
+    s.set_read_timeout(Some(std::time::Duration::from_secs(3)))
+        .unwrap();
+    let (_, pdu) = raw(&mut s, 1, &[4, 0, 0, 0, 1]);
+    assert_eq!(pdu[0], 4, "answered once the idle clients were closed");
+    drop((s, idle));
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success());
+    let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let m = &r["modbus"];
+    assert_eq!(m["max_clients"], 16, "{m}");
+    assert_eq!(m["refused_over_cap"], 1, "{m}");
+    assert_eq!(m["closed_idle"], 16, "{m}");
+    assert_eq!(m["clients"], 18, "{m}"); // 16 idle, 1 over the cap, 1 answered
+    assert_eq!(m["spawn_failures"], 0, "{m}");
+    assert!(m["listener_error"].is_null(), "{m}");
+}
+
+/// Refusals quote at most an excerpt of what was typed, not a whole 10 kB line.
+#[test]
+fn monitor_refusals_quote_an_excerpt() {
+    let long = "x".repeat(10_000);
+    let nine = "9".repeat(10_000);
+    for line in [
+        format!("frobnicate {long}"),
+        format!("run {nine}"),
+        format!("break cycle {long}"),
+        format!("force in {long} 1"),
+        format!("force in 3 {long}"),
+        format!("force {long} 3 1"),
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_microcomputer-plc"))
+            .args(["--interactive", "--no-svg"])
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut stdin = child.stdin.take().unwrap();
+        stdin
+            .write_all(format!("{line}\nquit\n").as_bytes())
+            .unwrap();
+        drop(stdin);
+        let out = child.wait_with_output().unwrap();
+        let text = String::from_utf8(out.stdout).unwrap();
+        let refusal = text
+            .lines()
+            .find(|l| l.starts_with("? "))
+            .unwrap_or_else(|| panic!("no refusal for {}", &line[..20]));
+        assert!(
+            refusal.len() < 200 && refusal.contains('…'),
+            "{}…",
+            &refusal[..refusal.len().min(200)]
+        );
+    }
+}
+
+/// In a simulated run every cycle is busy 1 ms and starts 50 ms after the one before: the
+/// jitter is 0 (it was 2 ms from the second cycle and 3 ms once the reserve ran a report,
+/// as the reserve's clock reads cost simulated time the period did not allow for).
+#[test]
+fn simulated_cycles_have_no_jitter() {
+    let dir = std::env::temp_dir().join(format!("regler-plc-jitter-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let script = dir.join("run.txt");
+    for cycles in [2, 1000] {
+        std::fs::write(&script, format!("run {cycles}\n")).unwrap();
+        let out = plc(&["--json", "--no-svg", "--script", script.to_str().unwrap()]);
+        assert!(out.status.success());
+        let r: Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(r["stats"]["last_us"], 1000, "{}", r["stats"]);
+        assert_eq!(
+            r["stats"]["jitter_us"], 0,
+            "{cycles} cycles: {}",
+            r["stats"]
+        );
+    }
 }

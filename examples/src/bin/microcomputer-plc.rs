@@ -46,6 +46,11 @@ struct Args {
     /// With --modbus: seconds to run before stopping (more than 0, at most 86400; default 30).
     #[arg(long, value_parser = cli::real_above(0.0, 86_400.0))]
     seconds: Option<f64>,
+    /// With --modbus: close a client's connection after this many seconds in which nothing
+    /// came from it (more than 0, at most 86400; default 60). At most 16 clients are served at
+    /// once: one more is closed at once.
+    #[arg(long, value_name = "SECONDS", value_parser = cli::real_above(0.0, 86_400.0))]
+    idle_timeout: Option<f64>,
     /// Signals in the timing diagram, comma-separated.
     #[arg(
         long,
@@ -78,20 +83,40 @@ fn run(args: &Args) -> Result<(), Stop> {
             "only applies with --modbus (the real-time server)",
         ));
     }
+    if args.idle_timeout.is_some() && args.modbus.is_none() {
+        return Err(cli::bad(
+            "--idle-timeout",
+            "only applies with --modbus (the real-time server)",
+        ));
+    }
     let seed = args.common.seed;
     let mut sim = Simulator::new(seed);
     let json = args.common.json;
     if let Some(address) = &args.modbus {
         let mut t = Transcript::new(!args.common.quiet && !json);
-        modbus::serve(&mut sim, address, args.seconds.unwrap_or(30.0), &mut t)?;
-        finish(args, &sim, t)
+        let idle = args.idle_timeout.unwrap_or(modbus::IDLE_SECONDS);
+        let report = modbus::serve(
+            &mut sim,
+            address,
+            args.seconds.unwrap_or(30.0),
+            idle,
+            &mut t,
+        )?;
+        let stopped = report.listener_error.clone();
+        finish(args, &sim, t, Some(report))?;
+        match stopped {
+            Some(why) => Err(Stop::Error(format!(
+                "the Modbus server stopped early: {why}"
+            ))),
+            None => Ok(()),
+        }
     } else if args.interactive {
         // The monitor answers whatever --quiet says: it is a dialogue.
         let mut t = Transcript::new(!json);
         let stdin = std::io::stdin();
         let terminal = stdin.is_terminal();
         monitor::run_stdin(&mut sim, stdin.lock(), terminal, &mut t)?;
-        finish(args, &sim, t)
+        finish(args, &sim, t, None)
     } else {
         let mut t = Transcript::new(!args.common.quiet && !json);
         let script = match &args.script {
@@ -104,23 +129,29 @@ fn run(args: &Args) -> Result<(), Stop> {
             None => DEMO_SCRIPT.as_bytes().to_vec(),
         };
         monitor::run_script(&mut sim, &script, &mut t)?;
-        finish(args, &sim, t)
+        finish(args, &sim, t, None)
     }
 }
 
 /// The picture, then the JSON summary or the closing text.
-fn finish(args: &Args, sim: &Simulator, mut t: Transcript) -> Result<(), Stop> {
+fn finish(
+    args: &Args,
+    sim: &Simulator,
+    mut t: Transcript,
+    server: Option<modbus::ServerReport>,
+) -> Result<(), Stop> {
     let picture = args.common.picture();
     if let Some(path) = picture {
         let svg = picture::timing_diagram(sim, &args.signals, args.window, args.common.seed);
         cli::write_picture(path, svg)?;
     }
     if args.common.json {
-        let summary = Summary::new(sim, args.common.seed, std::mem::take(&mut t.log));
+        let mut summary = Summary::new(sim, args.common.seed, std::mem::take(&mut t.log));
+        summary.modbus = server;
         let text = serde_json::to_string_pretty(&summary)?;
         t.out().line(&text)?;
     } else {
-        let text = summary::closing(sim, &t, picture);
+        let text = summary::closing(sim, &t, server.as_ref(), picture);
         t.out().text(&text)?;
     }
     t.out().flush()

@@ -20,14 +20,16 @@
 //! 2 (ILLEGAL DATA ADDRESS) and a value a register does not take is exception 3 (ILLEGAL DATA
 //! VALUE), and then no point of it acts.
 
-use std::io::{Read, Write};
+use std::io::{ErrorKind, Read, Write};
 use std::net::{TcpListener, TcpStream};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use rmodbus::server::ModbusFrame;
 use rmodbus::server::storage::ModbusStorage;
 use rmodbus::{ModbusFrameBuf, ModbusProto};
+use serde::Serialize;
 
 use super::PERIOD_MS;
 use super::monitor::Transcript;
@@ -116,13 +118,17 @@ fn answers_unit(unit: u8) -> bool {
 }
 
 /// Checks a request PDU against the specification and the map; the exception code if it fails.
-/// Order as the specification's server state diagrams: function, quantity and byte count,
-/// address range, value.
+/// Order as the specification's server state diagrams: function (a function not served is
+/// exception 1 whatever its length), then length, quantity and byte count (exception 3), address
+/// range (2), value (3).
 pub fn check(pdu: &[u8]) -> Result<(), u8> {
     let word = |i: usize| pdu.get(i..i + 2).map(|b| u16::from_be_bytes([b[0], b[1]]));
-    let (Some(&function), Some(address)) = (pdu.first(), word(1)) else {
-        return Err(ILLEGAL_DATA_VALUE);
-    };
+    // The function first, whatever follows it (even nothing).
+    let function = pdu.first().copied().ok_or(ILLEGAL_FUNCTION)?;
+    if !matches!(function, 1..=6 | 15 | 16) {
+        return Err(ILLEGAL_FUNCTION);
+    }
+    let address = word(1).ok_or(ILLEGAL_DATA_VALUE)?;
     let coils = [
         (map::OUTPUT_COILS, map::POINTS),
         (map::INPUT_COILS, map::POINTS),
@@ -256,17 +262,136 @@ pub fn requests(pdu: &[u8]) -> Vec<Request> {
     }
 }
 
+/// Clients served at once; a client that connects while this many are connected is closed at
+/// once (and counted).
+pub const MAX_CLIENTS: usize = 16;
+/// Seconds a client may stay silent (nothing received) before its connection is closed, unless
+/// `--idle-timeout` says otherwise; a reply the client does not take within as long closes it
+/// too.
+pub const IDLE_SECONDS: f64 = 60.0;
+/// The largest MBAP length field: the unit id and a PDU of 253 bytes (an ADU of 260 bytes, as
+/// the Modbus/TCP implementation guide allows). A frame with a longer (or shorter than 2)
+/// length, or a protocol id other than 0, closes the connection: its end cannot be known.
+pub const MAX_LENGTH: usize = 254;
+
+/// What the Modbus server did with its clients, for the summary.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ServerReport {
+    /// Clients served at once at most ([`MAX_CLIENTS`]).
+    pub max_clients: usize,
+    /// The idle timeout, seconds.
+    pub idle_timeout_s: f64,
+    /// Connections accepted (served or not).
+    pub clients: u64,
+    /// Connections closed at once because [`MAX_CLIENTS`] were connected.
+    pub refused_over_cap: u64,
+    /// Connections closed after the idle timeout.
+    pub closed_idle: u64,
+    /// Connections closed at once because no thread could be started for them.
+    pub spawn_failures: u64,
+    /// Failed accepts, each followed by a pause (100 ms, doubling to 1 s while they go on).
+    pub accept_errors: u64,
+    /// Why the server stopped listening, if it did before the run's end (the run then stops
+    /// and the program exits with status 1).
+    pub listener_error: Option<String>,
+}
+
+/// The server threads' counts (see [`ServerReport`]).
+#[derive(Debug, Default)]
+struct Counters {
+    active: AtomicUsize,
+    clients: AtomicU64,
+    refused: AtomicU64,
+    idle: AtomicU64,
+    spawn_failures: AtomicU64,
+    accept_errors: AtomicU64,
+}
+
+/// Lowers the count of active clients when a client's thread ends (or its closure is dropped
+/// without running, when the thread could not be started).
+struct Active(Arc<Counters>);
+
+impl Drop for Active {
+    fn drop(&mut self) {
+        self.0.active.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+/// A client's work, to be run on a thread of its own.
+type Job = Box<dyn FnOnce() + Send>;
+
+/// Whether an accept error means the listening socket itself is broken (no retry helps).
+fn fatal(e: &std::io::Error) -> bool {
+    matches!(
+        e.kind(),
+        ErrorKind::InvalidInput | ErrorKind::Unsupported | ErrorKind::NotConnected
+    )
+}
+
+/// Accepts clients until `accept` fails for good: each is served on a thread `spawn` starts,
+/// unless [`MAX_CLIENTS`] are connected or no thread can be started (then it is closed at
+/// once); a passing accept error (out of file descriptors, an aborted connection) is counted
+/// and followed by a pause, so the loop never spins.
+fn accept_loop(
+    mut accept: impl FnMut() -> std::io::Result<TcpStream>,
+    spawn: impl Fn(Job) -> std::io::Result<()>,
+    state: &Arc<Mutex<Shared>>,
+    counters: &Arc<Counters>,
+    idle: Duration,
+) -> Result<(), String> {
+    let mut pause = Duration::from_millis(100);
+    loop {
+        let stream = match accept() {
+            Ok(stream) => stream,
+            Err(e) if fatal(&e) => {
+                return Err(format!("cannot accept clients: {}", cli::io_message(&e)));
+            }
+            Err(_) => {
+                counters.accept_errors.fetch_add(1, Ordering::SeqCst);
+                std::thread::sleep(pause);
+                pause = (pause * 2).min(Duration::from_secs(1));
+                continue;
+            }
+        };
+        pause = Duration::from_millis(100);
+        counters.clients.fetch_add(1, Ordering::SeqCst);
+        if counters.active.fetch_add(1, Ordering::SeqCst) >= MAX_CLIENTS {
+            counters.active.fetch_sub(1, Ordering::SeqCst);
+            counters.refused.fetch_add(1, Ordering::SeqCst);
+            drop(stream);
+            continue;
+        }
+        let active = Active(Arc::clone(counters));
+        let (state, counters_of_client) = (Arc::clone(state), Arc::clone(counters));
+        let job: Job = Box::new(move || {
+            let _active = active;
+            if let Err(Ended::Idle) = client(stream, &state, idle) {
+                counters_of_client.idle.fetch_add(1, Ordering::SeqCst);
+            }
+        });
+        // A job that cannot be started is dropped: its stream closes, `Active` counts down.
+        if spawn(job).is_err() {
+            counters.spawn_failures.fetch_add(1, Ordering::SeqCst);
+        }
+    }
+}
+
 /// Runs the PLC in real time for `seconds`, serving its images over Modbus/TCP at `address`
-/// (announced on stderr, so `--json` stays clean); every request carried out is noted in `t`.
+/// (announced on stderr, so `--json` stays clean) to at most [`MAX_CLIENTS`] clients at once,
+/// each closed after `idle` seconds without a request; every request carried out is noted in
+/// `t`. Returns what the server did; if it stopped listening, the run stops there and
+/// [`ServerReport::listener_error`] says why.
 ///
 /// # Errors
-/// The address cannot be listened on, or [`Stop::Closed`] when stdout's reader has gone.
+/// The address cannot be listened on, the server's thread cannot be started, or
+/// [`Stop::Closed`] when stdout's reader has gone.
 pub fn serve(
     sim: &mut Simulator,
     address: &str,
     seconds: f64,
+    idle: f64,
     t: &mut Transcript,
-) -> Result<(), Stop> {
+) -> Result<ServerReport, Stop> {
     let listener = TcpListener::bind(address).map_err(|e| {
         cli::bad(
             "--modbus",
@@ -276,29 +401,62 @@ pub fn serve(
     let local = listener
         .local_addr()
         .map_err(|e| cli::bad("--modbus", cli::io_message(&e)))?;
+    let shared = Arc::new(Mutex::new(Shared {
+        storage: Storage::new(),
+        requests: Vec::new(),
+    }));
+    let counters = Arc::new(Counters::default());
+    let idle_time = Duration::from_secs_f64(idle);
+    let (state, server_counters) = (Arc::clone(&shared), Arc::clone(&counters));
+    let server = std::thread::Builder::new()
+        .name("modbus listener".into())
+        .spawn(move || {
+            accept_loop(
+                || listener.accept().map(|(stream, _)| stream),
+                |job| {
+                    std::thread::Builder::new()
+                        .name("modbus client".into())
+                        .stack_size(256 * 1024)
+                        .spawn(job)
+                        .map(drop)
+                },
+                &state,
+                &server_counters,
+                idle_time,
+            )
+        })
+        .map_err(|e| format!("cannot start the Modbus server: {}", cli::io_message(&e)))?;
     // A test reads the address from this line.
     let _ = writeln!(
         std::io::stderr(),
         "Modbus/TCP on {local} (unit ids 0, 1, 255): discrete inputs 0-15 = inputs, 100-115 / 200-215 = output / input forced; coils 0-15 = outputs, 1000-1015 force inputs; input registers 0-18; holding 0-2 release forcing"
     );
     sim.plant.use_real_clock();
-    let shared = Arc::new(Mutex::new(Shared {
-        storage: Storage::new(),
-        requests: Vec::new(),
-    }));
-    let server_state = Arc::clone(&shared);
-    std::thread::spawn(move || {
-        for stream in listener.incoming().flatten() {
-            let state = Arc::clone(&server_state);
-            std::thread::spawn(move || {
-                let _ = client(stream, &state);
-            });
-        }
-    });
+    let mut listener_error = None;
+    let mut server = Some(server);
     let start = Instant::now();
     let period = Duration::from_millis(u64::from(PERIOD_MS));
     let mut next = start;
     while start.elapsed().as_secs_f64() < seconds {
+        if server
+            .as_ref()
+            .is_some_and(std::thread::JoinHandle::is_finished)
+            && let Some(handle) = server.take()
+        {
+            listener_error = Some(match handle.join() {
+                Ok(Err(why)) => why,
+                Ok(Ok(())) => "the server stopped listening".to_string(),
+                Err(panic) => format!(
+                    "the server failed: {}",
+                    panic
+                        .downcast_ref::<&str>()
+                        .map(ToString::to_string)
+                        .or_else(|| panic.downcast_ref::<String>().cloned())
+                        .unwrap_or_else(|| "a panic".to_string())
+                ),
+            });
+            break;
+        }
         let requests: Vec<Request> = match shared.lock() {
             Ok(mut s) => std::mem::take(&mut s.requests),
             Err(_) => return Err("the Modbus server thread failed".into()),
@@ -320,7 +478,17 @@ pub fn serve(
             std::thread::sleep(wait);
         }
     }
-    Ok(())
+    let count = |c: &AtomicU64| c.load(Ordering::SeqCst);
+    Ok(ServerReport {
+        max_clients: MAX_CLIENTS,
+        idle_timeout_s: idle,
+        clients: count(&counters.clients),
+        refused_over_cap: count(&counters.refused),
+        closed_idle: count(&counters.idle),
+        spawn_failures: count(&counters.spawn_failures),
+        accept_errors: count(&counters.accept_errors),
+        listener_error,
+    })
 }
 
 /// Carries out one request on the executive: nothing, or ` refused: why`.
@@ -382,67 +550,168 @@ fn publish(sim: &Simulator, storage: &mut Storage) {
     storage.inputs[..values.len()].copy_from_slice(&values);
 }
 
-/// Serves one Modbus/TCP client: one MBAP frame at a time.
-fn client(mut stream: TcpStream, state: &Mutex<Shared>) -> Result<(), String> {
-    loop {
-        let mut buf: ModbusFrameBuf = [0; 256];
-        stream
-            .read_exact(&mut buf[..7])
-            .map_err(|e| cli::io_message(&e))?;
-        let length = usize::from(u16::from_be_bytes([buf[4], buf[5]]));
-        if !(2..=250).contains(&length) || buf[2..4] != [0, 0] {
-            return Err(format!("not a Modbus/TCP frame (length {length})"));
+/// Why a client's connection ended.
+#[derive(Debug)]
+enum Ended {
+    /// Nothing came for the idle timeout (or a reply was not taken within it).
+    Idle,
+    /// The client closed it, sent what is no Modbus/TCP frame, or the connection failed.
+    Other,
+}
+
+impl From<std::io::Error> for Ended {
+    fn from(e: std::io::Error) -> Ended {
+        if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) {
+            Ended::Idle
+        } else {
+            Ended::Other
         }
-        stream
-            .read_exact(&mut buf[7..6 + length])
-            .map_err(|e| cli::io_message(&e))?;
+    }
+}
+
+/// Serves one Modbus/TCP client: one MBAP frame at a time, until the client closes, sends
+/// something that is no Modbus/TCP frame, or stays silent for `idle`.
+fn client(mut stream: TcpStream, state: &Mutex<Shared>, idle: Duration) -> Result<(), Ended> {
+    stream.set_read_timeout(Some(idle))?;
+    stream.set_write_timeout(Some(idle))?;
+    // The MBAP header (7 bytes) and the largest PDU (253 bytes).
+    let mut buf = [0u8; 6 + MAX_LENGTH];
+    loop {
+        stream.read_exact(&mut buf[..7])?;
+        let length = usize::from(u16::from_be_bytes([buf[4], buf[5]]));
+        if !(2..=MAX_LENGTH).contains(&length) || buf[2..4] != [0, 0] {
+            return Err(Ended::Other);
+        }
+        stream.read_exact(&mut buf[7..6 + length])?;
         let unit = buf[6];
         let function = buf[7];
+        let pdu = &buf[7..6 + length];
         let verdict = if answers_unit(unit) {
-            check(&buf[7..6 + length])
+            check(pdu)
         } else {
             Err(GATEWAY_TARGET_FAILED)
         };
+        // What passed `check` is short (the map is small); rmodbus takes frames of 256 bytes.
+        let mut frame_buf: ModbusFrameBuf = [0; 256];
+        let verdict = verdict.and_then(|()| {
+            frame_buf
+                .get_mut(..6 + length)
+                .ok_or(ILLEGAL_DATA_VALUE)?
+                .copy_from_slice(&buf[..6 + length]);
+            Ok(())
+        });
         if let Err(code) = verdict {
-            stream
-                .write_all(&exception(&buf, function, code))
-                .map_err(|e| cli::io_message(&e))?;
+            stream.write_all(&exception(&buf, function, code))?;
             continue;
         }
+        let asked = requests(pdu);
         // rmodbus answers unit 1; 0 and 255 are ours too (see answers_unit).
-        buf[6] = 1;
+        frame_buf[6] = 1;
         let mut response = Vec::new();
-        let mut frame = ModbusFrame::new(1, &buf, ModbusProto::TcpUdp, &mut response);
-        frame
-            .parse()
-            .map_err(|_| "the frame could not be parsed".to_string())?;
+        let mut frame = ModbusFrame::new(1, &frame_buf, ModbusProto::TcpUdp, &mut response);
+        if frame.parse().is_err() {
+            return Err(Ended::Other);
+        }
         if frame.processing_required {
-            let mut s = state.lock().map_err(|_| "poisoned".to_string())?;
-            if frame.readonly {
-                frame
-                    .process_read(&s.storage)
-                    .map_err(|_| "the frame could not be processed".to_string())?;
+            let Ok(mut s) = state.lock() else {
+                return Err(Ended::Other);
+            };
+            let done = if frame.readonly {
+                frame.process_read(&s.storage).is_ok()
             } else {
-                frame
-                    .process_write(&mut s.storage)
-                    .map_err(|_| "the frame could not be processed".to_string())?;
+                let done = frame.process_write(&mut s.storage).is_ok();
                 // Every point the request names acts (module documentation), then the
                 // holding registers, which are commands, read as 0 again.
-                let asked = requests(&buf[7..6 + length]);
                 s.requests.extend(asked);
                 s.storage.holdings[..3].fill(0);
+                done
+            };
+            if !done {
+                return Err(Ended::Other);
             }
         }
         if frame.response_required {
-            frame
-                .finalize_response()
-                .map_err(|_| "the response could not be made".to_string())?;
+            if frame.finalize_response().is_err() {
+                return Err(Ended::Other);
+            }
             if let Some(u) = response.get_mut(6) {
                 *u = unit;
             }
-            stream
-                .write_all(&response)
-                .map_err(|e| cli::io_message(&e))?;
+            stream.write_all(&response)?;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn state() -> Arc<Mutex<Shared>> {
+        Arc::new(Mutex::new(Shared {
+            storage: Storage::new(),
+            requests: Vec::new(),
+        }))
+    }
+
+    /// A client whose thread cannot be started is closed at once and counted; the loop goes
+    /// on, and ends with the reason when accepting fails for good. No panic.
+    #[test]
+    fn a_client_without_a_thread_is_closed_and_counted() {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let address = listener.local_addr().unwrap();
+        let mut peer = TcpStream::connect(address).unwrap();
+        peer.set_read_timeout(Some(Duration::from_secs(3))).unwrap();
+        let counters = Arc::new(Counters::default());
+        let mut accepted = 0;
+        let (mut errors, mut fatals) = (0, 0);
+        let result = accept_loop(
+            || {
+                accepted += 1;
+                match accepted {
+                    1 => listener.accept().map(|(s, _)| s),
+                    2 => {
+                        errors += 1;
+                        Err(std::io::Error::from_raw_os_error(24)) // EMFILE: passes
+                    }
+                    _ => {
+                        fatals += 1;
+                        Err(std::io::Error::from(ErrorKind::InvalidInput))
+                    }
+                }
+            },
+            |_job| Err(std::io::Error::from(ErrorKind::WouldBlock)),
+            &state(),
+            &counters,
+            Duration::from_secs(1),
+        );
+        assert_eq!(
+            result,
+            Err("cannot accept clients: invalid input parameter".to_string())
+        );
+        assert_eq!((errors, fatals), (1, 1));
+        assert_eq!(counters.spawn_failures.load(Ordering::SeqCst), 1);
+        assert_eq!(counters.accept_errors.load(Ordering::SeqCst), 1);
+        assert_eq!(counters.active.load(Ordering::SeqCst), 0);
+        let mut byte = [0u8; 1];
+        assert_eq!(peer.read(&mut byte).unwrap(), 0, "closed at once");
+    }
+
+    /// Every function not served is exception 1 whatever follows it; lengths decide nothing
+    /// before the function does.
+    #[test]
+    fn the_function_is_checked_first() {
+        for f in 0..=255u8 {
+            for n in 0..=5 {
+                let mut pdu = vec![f];
+                pdu.extend_from_slice(&[0, 0, 0, 1, 2][..n]);
+                let want = match (f, n) {
+                    (1..=4 | 6, 4) => Ok(()),
+                    (1..=6 | 15 | 16, _) => Err(ILLEGAL_DATA_VALUE),
+                    _ => Err(ILLEGAL_FUNCTION),
+                };
+                assert_eq!(check(&pdu), want, "function {f:#04x}, {n} bytes");
+            }
+        }
+        assert_eq!(check(&[]), Err(ILLEGAL_FUNCTION));
     }
 }

@@ -112,21 +112,27 @@ impl Simulator {
                 .map(|&(_, _, p)| p)
                 .or_else(|| s.parse().ok())
                 .ok_or_else(|| {
-                    format!("no such point: {s} (a number 0-15 or a name; help lists them)")
+                    format!(
+                        "no such point: {} (a number 0-15 or a name; help lists them)",
+                        cli::excerpt(s)
+                    )
                 })
         };
         let level = |s: &str| -> Result<bool, String> {
             match s {
                 "1" | "on" => Ok(true),
                 "0" | "off" => Ok(false),
-                other => Err(format!("expected on/off or 1/0, got {other}")),
+                other => Err(format!(
+                    "expected on/off or 1/0, got {}",
+                    cli::excerpt(other)
+                )),
             }
         };
         let io_side = |s: &str| -> Result<bool, String> {
             match s {
                 "in" => Ok(true),
                 "out" => Ok(false),
-                other => Err(format!("expected in or out, got {other}")),
+                other => Err(format!("expected in or out, got {}", cli::excerpt(other))),
             }
         };
         let mut out = String::new();
@@ -137,7 +143,9 @@ impl Simulator {
                     .parse()
                     .ok()
                     .filter(|n| (1..=RUN_MAX).contains(n))
-                    .ok_or_else(|| format!("run takes 1 to {RUN_MAX} cycles, got {n}"))?;
+                    .ok_or_else(|| {
+                        format!("run takes 1 to {RUN_MAX} cycles, got {}", cli::excerpt(n))
+                    })?;
                 let (done, why) = self.run(n);
                 let _ = writeln!(out, "{}", ran(done, why, None));
             }
@@ -152,9 +160,9 @@ impl Simulator {
                 let _ = writeln!(out, "{}", ran(done, why, Some(CONT_MAX)));
             }
             ["break", "cycle", n] => {
-                let n = n
-                    .parse()
-                    .map_err(|_| format!("break cycle takes a cycle number, got {n}"))?;
+                let n = n.parse().map_err(|_| {
+                    format!("break cycle takes a cycle number, got {}", cli::excerpt(n))
+                })?;
                 // A cycle already run can never be reached again: refused, as `run` does.
                 let b = Breakpoint::Cycle(n);
                 self.plc
@@ -209,7 +217,10 @@ impl Simulator {
             ["help"] => out.push_str(&help()),
             [first, ..] => {
                 return Err(usage(first).unwrap_or_else(|| {
-                    format!("unknown command '{line}' (help lists the commands)")
+                    format!(
+                        "unknown command '{}' (help lists the commands)",
+                        cli::excerpt(line)
+                    )
                 }));
             }
         }

@@ -91,6 +91,7 @@ impl Simulator {
         let mut done = 0u64;
         while done < cycles {
             let watch = self.plc.watch();
+            let cycle_from_us = self.plant.clock_us;
             let program = &mut self.program;
             if let Err(halt) = self.plc.cycle(&mut self.plant, |scan| program.scan(scan)) {
                 return (done, Some(halt));
@@ -124,9 +125,14 @@ impl Simulator {
                 inputs: self.plc.inputs().word(0).unwrap_or(0),
                 outputs: self.plc.outputs().word(0).unwrap_or(0),
             });
-            // The rest of the period passes; the plant moves; latched pulses are caught.
-            let busy_ms = self.plc.stats().last_us / 1000;
-            self.plant.advance(PERIOD_MS.saturating_sub(busy_ms).max(1));
+            // The rest of the period passes; the plant moves; latched pulses are caught. The
+            // rest is counted on the plant's clock from before the cycle's first read, so the
+            // reserve's clock reads (1 ms each) come out of the period too and the next cycle
+            // starts exactly one period after this one (no jitter unless a cycle overruns).
+            let spent_ms = (self.plant.clock_us - cycle_from_us) / 1000;
+            let rest_ms = u64::from(PERIOD_MS).saturating_sub(spent_ms).max(1);
+            self.plant
+                .advance(u32::try_from(rest_ms).unwrap_or(PERIOD_MS));
             self.plc.capture(&self.plant.inputs);
             // A breakpoint stops the run on the cycle it comes to hold, not while it holds.
             if let Some(b) = watch.fired(&self.plc, &self.breakpoints) {

@@ -2,6 +2,7 @@
 
 use serde::Serialize;
 
+use super::modbus::ServerReport;
 use super::plant::Tally;
 use super::simulator::Simulator;
 use super::{SIGNALS, monitor::Transcript};
@@ -42,6 +43,9 @@ pub struct Summary {
     pub forced_outputs: Vec<Forced>,
     /// Every command and its output, and every Modbus request.
     pub log: Vec<String>,
+    /// With `--modbus`: what the server did with its clients (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub modbus: Option<ServerReport>,
 }
 
 fn forced(points: impl Iterator<Item = (usize, bool)>, input: bool) -> Vec<Forced> {
@@ -74,6 +78,7 @@ impl Summary {
             forced_inputs: forced(sim.plc.forced_inputs().iter(), true),
             forced_outputs: forced(sim.plc.forced_outputs().iter(), false),
             log,
+            modbus: None,
         }
     }
 }
@@ -84,6 +89,7 @@ impl Summary {
 pub fn closing(
     sim: &Simulator,
     transcript: &Transcript,
+    server: Option<&ServerReport>,
     picture: Option<&std::path::Path>,
 ) -> String {
     let stats = sim.stats();
@@ -92,8 +98,38 @@ pub fn closing(
     } else {
         stats
     };
+    if let Some(r) = server {
+        text.push_str(&server_line(r));
+    }
     if let Some(path) = picture {
         text.push_str(&format!("Timing diagram: {}\n", path.display()));
     }
     text
+}
+
+/// The Modbus server's line in the closing text.
+fn server_line(r: &ServerReport) -> String {
+    let mut line = format!(
+        "Modbus: {} client{} (at most {} at once), {} closed over that cap, {} closed idle after {} s",
+        r.clients,
+        if r.clients == 1 { "" } else { "s" },
+        r.max_clients,
+        r.refused_over_cap,
+        r.closed_idle,
+        crate::cli::number(r.idle_timeout_s),
+    );
+    if r.spawn_failures > 0 {
+        line.push_str(&format!(
+            ", {} closed for want of a thread",
+            r.spawn_failures
+        ));
+    }
+    if r.accept_errors > 0 {
+        line.push_str(&format!(", {} failed accepts", r.accept_errors));
+    }
+    line.push('\n');
+    if let Some(why) = &r.listener_error {
+        line.push_str(&format!("Modbus server stopped early: {why}\n"));
+    }
+    line
 }
