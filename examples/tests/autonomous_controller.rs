@@ -773,3 +773,178 @@ fn no_debug_text_reaches_the_user() {
         "{text}"
     );
 }
+
+/// The room's start-up answers, one a line: TYPE S YMIN YMAX DYMAX KP TI TD SCALEMIN SCALEMAX
+/// DIR RFEL WIN CR.
+const ROOM_ANSWERS: [&str; 14] = [
+    "PID", "10", "0", "10", "0.5", "2", "900", "60", "0", "40", "DIR", "1.5", "20", "",
+];
+
+/// The longest run of digits in `text` (1e300 printed in full is 301).
+fn longest_digits(text: &str) -> usize {
+    text.split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0)
+}
+
+/// F5/F6 of the attack: a start-up answer of any size, at any numeric question, by script and
+/// by `--interactive` with piped stdin. Either the dialogue takes it and the run goes on
+/// (exit 0), or the answer is refused when typed and named with its line and the reply; never
+/// an exit after REGULATOR STARTED, never a number printed in hundreds of digits.
+#[test]
+fn an_extreme_startup_answer_is_refused_when_typed_or_runs() {
+    let extremes = [
+        "1e300", "-1e300", "1e50", "1e39", "1e38", "1e-320", "0", "NaN", "1e7",
+    ];
+    // Numeric questions: S YMIN YMAX DYMAX KP TI TD SCALEMIN SCALEMAX RFEL WIN (0-based).
+    for at in [1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12] {
+        for x in extremes {
+            let mut answers = ROOM_ANSWERS;
+            answers[at] = x;
+            let line = at + 1;
+            let script: String = answers.iter().map(|a| format!("0 term {a}\n")).collect();
+            let path = temp_file(&format!("extreme-{at}-{x}.txt"), &script);
+            let out = controller(&[
+                "--hours",
+                "0.01",
+                "--no-picture",
+                "-q",
+                "--script",
+                path.to_str().unwrap(),
+            ]);
+            let err = String::from_utf8_lossy(&out.stderr);
+            let text = String::from_utf8_lossy(&out.stdout);
+            // Refused at its line, or taken: then a later answer may be refused (SCALE MIN 1e38
+            // makes the SCALE MAX 40 after it too small), and that one is named.
+            let named = format!("script line {line}: the controller refused '{x}': ");
+            match out.status.code() {
+                Some(0) => {}
+                Some(2) => {
+                    assert!(
+                        err.contains(&named) || err.contains("the controller refused '"),
+                        "{x} at line {line}: {err}"
+                    );
+                    assert!(err.contains("not finished"), "{x} at line {line}: {err}");
+                }
+                other => panic!("{x} at line {line}: exit {other:?}: {err}"),
+            }
+            assert!(
+                !(out.status.code() == Some(2) && text.contains("REGULATOR STARTED")),
+                "{x} at line {line}: {text}"
+            );
+            assert!(longest_digits(&err) < 20, "{x} at line {line}: {err}");
+            assert!(longest_digits(&text) < 20, "{x} at line {line}: {text}");
+
+            let input: String = answers.iter().map(|a| format!("{a}\n")).collect();
+            let out = controller_with_input(
+                &["--interactive", "--hours", "0.01", "--no-picture"],
+                input.as_bytes(),
+            );
+            let err = String::from_utf8_lossy(&out.stderr);
+            let text = String::from_utf8_lossy(&out.stdout);
+            let named = format!("input line {line}: the controller refused '{x}': ");
+            match out.status.code() {
+                Some(0) => {}
+                Some(2) => {
+                    assert!(
+                        err.contains(&named) || err.contains("the controller refused '"),
+                        "--interactive {x} at {line}: {err}"
+                    );
+                    assert!(err.contains("input line"), "{x} at {line}: {err}");
+                    assert!(!text.contains("REGULATOR STARTED"), "{x} at {line}: {text}");
+                }
+                other => panic!("--interactive {x} at line {line}: exit {other:?}: {err}"),
+            }
+            assert!(longest_digits(&err) < 20, "{x} at line {line}: {err}");
+            assert!(longest_digits(&text) < 20, "{x} at line {line}: {text}");
+        }
+    }
+}
+
+/// F5: SCALE MAX 1e300 (the controller's f32 cannot hold it) is refused at the question, with
+/// the reason and the number as typed; the next answer is taken and the run goes on.
+#[test]
+fn a_scale_the_controller_cannot_hold_is_asked_again() {
+    for (min, max, why) in [
+        ("0", "1e300", "does not fit the controller's number type"),
+        ("0", "1e50", "does not fit the controller's number type"),
+        ("-1e300", "40", "SCALE MIN"),
+        ("0", "1e-320", "normal"),
+        // The night set-back (--night-setback, 3 by default) must fit in the span.
+        ("0", "1", "night set-back"),
+    ] {
+        let mut answers: Vec<&str> = ROOM_ANSWERS.to_vec();
+        answers[8] = min;
+        answers[9] = max;
+        let refused_line = if min == "-1e300" { 9 } else { 10 };
+        if min == "-1e300" {
+            answers.insert(9, "0");
+        } else {
+            answers.insert(10, "40");
+        }
+        let script: String = answers.iter().map(|a| format!("0 term {a}\n")).collect();
+        let path = temp_file(&format!("scale-{min}-{max}.txt"), &script);
+        let out = controller(&[
+            "--hours",
+            "0.1",
+            "--no-picture",
+            "--script",
+            path.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{min}..{max}: {err}");
+        let typed = if min == "-1e300" { min } else { max };
+        let named = format!("script line {refused_line}: the controller refused '{typed}': ");
+        assert!(err.contains(&named), "{min}..{max}: {err}");
+        assert!(err.contains(why), "{min}..{max}: {err}");
+        assert!(err.contains("asked again"), "{min}..{max}: {err}");
+        assert!(text.contains("REGULATOR STARTED"), "{text}");
+        assert!(longest_digits(&err) < 20, "{err}");
+        assert!(longest_digits(&text) < 20, "{text}");
+    }
+}
+
+/// F6: a script whose dialogue does not finish names every refused answer (line, what was
+/// typed, the reply) and the question left unanswered.
+#[test]
+fn an_unfinished_dialogue_names_its_refused_answers_and_the_open_question() {
+    let cases: [(&str, &[&str], &str); 3] = [
+        (
+            "0 term PID\n0 term 300\n",
+            &["script line 2: the controller refused '300': SMAX=255"],
+            "SAMPLING PERIOD S",
+        ),
+        (
+            // KP 1e300 refused at line 6; the answers after it shift and the dialogue ends
+            // at the direction.
+            "0 term PID\n0 term 10\n0 term 0\n0 term 10\n0 term 0.5\n0 term 1e300\n0 term 900\n\
+             0 term 60\n0 term 0\n0 term 40\n0 term DIR\n0 term 1.5\n0 term 20\n0 term\n",
+            &["script line 6: the controller refused '1e300': KPMAX=10000"],
+            "?>",
+        ),
+        (
+            "0 term PID\n0 term 10\n0 term 0\n0 term 10\n0 term 0.5\n0 term 2\n0 term 900\n\
+             0 term 60\n0 term 5\n0 term 5\n0 term DIR\n0 term 1.5\n0 term 5\n0 term\n",
+            &[
+                "script line 10: the controller refused '5': SCALEMAX <= SCALEMIN ! TRY AGAIN",
+                "script line 11: the controller refused 'DIR': TRY AGAIN",
+            ],
+            "?>",
+        ),
+    ];
+    for (script, refusals, question) in cases {
+        let path = temp_file("unfinished.txt", script);
+        let out = controller(&["--no-picture", "--script", path.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains("not finished"), "{err}");
+        assert!(err.contains("left unanswered"), "{err}");
+        assert!(err.contains(question), "{err}");
+        for refusal in refusals {
+            assert!(err.contains(refusal), "{refusal}: {err}");
+        }
+        assert!(longest_digits(&err) < 20, "{err}");
+    }
+}

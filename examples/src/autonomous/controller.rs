@@ -16,8 +16,10 @@ use super::keypad::{self, KeyEffect, Keypad};
 use super::plant::{HEATER_GAIN, Motor, Plant};
 use super::report::FirstStep;
 use super::script::{Event, Input};
-use super::terminal::{Startup, Terminal};
+use super::startup::{Number, Question, Startup, unfinished};
+use super::terminal::Terminal;
 use super::{Interface, ProcessKind, Refusal, Shown, SimConfig, SimReport, TracePoint};
+use crate::cli::excerpt;
 
 /// Checks the configuration and the script against what a plant can have (the program's
 /// argument parsers check the plain ranges first; this is the check of what depends on the
@@ -117,7 +119,7 @@ pub struct Sim {
     process: ProcessKind,
     outdoor_compensation: bool,
     trace_every_s: f64,
-    station: Station<f32>,
+    station: Station<Number>,
     scaling: Scaling,
     terminal: Terminal,
     keypad: Keypad,
@@ -144,8 +146,8 @@ impl Sim {
     pub fn new(config: &SimConfig, startup: Startup, terminal: Terminal) -> Result<Sim, String> {
         let mut params = startup.params;
         params.night_setback = config.night_setback;
-        let station = Station::<f32>::new(params, startup.scaling, OperatorLimits::default())
-            .map_err(|e| e.to_string())?;
+        let station = Station::<Number>::new(params, startup.scaling, OperatorLimits::default())
+            .map_err(super::startup::words)?;
         Ok(Sim {
             process: config.process,
             outdoor_compensation: config.outdoor_compensation,
@@ -331,7 +333,7 @@ pub fn run(
     let mut shown: Vec<Shown> = Vec::new();
     let mut refused: Vec<Refusal> = Vec::new();
     let mut events = config.script.iter().peekable();
-    let mut terminal = Terminal::new();
+    let mut terminal = Terminal::with_night_setback(config.night_setback);
     let startup = match config.interface {
         Interface::Keypad => keypad_startup(config.process)?,
         Interface::Terminal => {
@@ -341,48 +343,41 @@ pub fn run(
                     text: line,
                 });
             }
-            let mut done = None;
-            while done.is_none() {
+            loop {
                 let Some(event) = events.next_if(|e| matches!(e.input, Input::Term(_))) else {
-                    return Err(
-                        "the start-up dialogue is not finished: the script must answer every \
-                                question with `term` lines before any other command"
-                            .into(),
-                    );
+                    let named: Vec<String> = refused.iter().map(ToString::to_string).collect();
+                    let question = terminal.question().unwrap_or(Question::Start);
+                    return Err(unfinished(
+                        "the script must answer every question with `term` lines before any \
+                         other command",
+                        question,
+                        &named,
+                    ));
                 };
                 let Input::Term(line) = &event.input else {
                     continue;
                 };
                 shown.push(Shown {
                     t_s: event.t_s,
-                    text: format!("> {line}"),
+                    text: format!("> {}", excerpt(line)),
                 });
-                let asked = terminal.question();
-                let (out, result) = terminal.startup_line(line);
-                if result.is_none() && terminal.question() == asked {
+                let answer = terminal.startup_line(line);
+                if let Some(reply) = answer.refused {
                     // The question is asked again: the script's next `term` line answers it.
-                    let reply: Vec<&str> = out
-                        .iter()
-                        .map(String::as_str)
-                        .filter(|t| !t.ends_with("?>") && !t.ends_with('!'))
-                        .collect();
                     refused.push(Refusal {
                         line: event.line,
                         input: line.clone(),
-                        reply: if reply.is_empty() {
-                            "asked again".into()
-                        } else {
-                            format!("{} (asked again)", reply.join(" / ").trim())
-                        },
+                        reply,
                     });
                 }
-                shown.extend(out.into_iter().map(|text| Shown {
+                shown.extend(answer.lines.into_iter().map(|text| Shown {
                     t_s: event.t_s,
                     text,
                 }));
-                done = result;
+                if let Some(startup) = answer.started {
+                    break startup;
+                }
             }
-            done.ok_or("start-up did not finish")?
         }
     };
     let mut sim = Sim::new(config, startup, terminal)?;
@@ -416,7 +411,7 @@ pub fn run(
 
 fn apply(
     event: &Event,
-    station: &mut Station<f32>,
+    station: &mut Station<Number>,
     terminal: &mut Terminal,
     keypad: &mut Keypad,
     plant: &mut Plant,
@@ -427,7 +422,7 @@ fn apply(
         Input::Term(line) => {
             shown.push(Shown {
                 t_s,
-                text: format!("> {line}"),
+                text: format!("> {}", excerpt(line)),
             });
             for text in terminal.running_line(line, station) {
                 shown.push(Shown { t_s, text });

@@ -16,15 +16,16 @@ use std::time::{Duration, Instant};
 
 use super::json::Trace;
 use super::script::parse_script;
+use super::startup::{Question, unfinished};
 use super::summary::clock;
 use super::terminal::Terminal;
 use super::{Input, Interface, Shown, Sim, SimConfig, SimReport, keypad_startup};
-use crate::cli::{Out, Stop};
+use crate::cli::{Out, Stop, excerpt};
 
 /// What the input thread read.
 enum Typed {
-    /// A line of text (without its line end).
-    Line(String),
+    /// Line `n` (1 is the first), a line of text (without its line end).
+    Line(usize, String),
     /// Line `n` (1 is the first) was not UTF-8 text.
     NotText(usize),
 }
@@ -45,7 +46,7 @@ fn reader() -> mpsc::Receiver<Typed> {
                 bytes.pop();
             }
             let typed = match String::from_utf8(bytes.clone()) {
-                Ok(line) => Typed::Line(line),
+                Ok(line) => Typed::Line(n, line),
                 Err(_) => Typed::NotText(n),
             };
             if tx.send(typed).is_err() {
@@ -128,37 +129,52 @@ pub fn run<'a>(
         screen.say(&["Answer the start-up questions; then Y (change mode), C (acknowledge), an empty line (status), keys …, night on|off, outdoor D, run SECONDS, quit.".into()])?;
     }
     let not_text = |n: usize| format!("input line {n} is not UTF-8 text: ignored");
-    let mut terminal = Terminal::new();
+    let mut terminal = Terminal::with_night_setback(config.night_setback);
     let mut transcript: Vec<Shown> = Vec::new();
+    // Answers refused during start-up, named if the input ends before the dialogue does.
+    let mut refused: Vec<String> = Vec::new();
     let startup = match config.interface {
         Interface::Keypad => keypad_startup(config.process)?,
         Interface::Terminal => {
             screen.say(&Terminal::banner())?;
             loop {
-                let line = match rx.recv() {
-                    Ok(Typed::Line(line)) => line,
+                let unanswered = terminal.question().unwrap_or(Question::Start);
+                let (n, line) = match rx.recv() {
+                    Ok(Typed::Line(n, line)) => (n, line),
                     Ok(Typed::NotText(n)) => {
                         screen.say(&[not_text(n)])?;
                         continue;
                     }
                     Err(_) => {
-                        return Err("input ended before the start-up dialogue was finished".into());
+                        return Err(unfinished("the input ended", unanswered, &refused).into());
                     }
                 };
                 if line.trim().eq_ignore_ascii_case("quit") {
-                    return Err("quit during the start-up dialogue".into());
+                    return Err(unfinished("quit", unanswered, &refused).into());
                 }
+                let echo = format!("> {}", excerpt(&line));
                 if !typing {
-                    screen.say(&[format!("> {line}")])?;
+                    screen.say(std::slice::from_ref(&echo))?;
                 }
                 transcript.push(Shown {
                     t_s: 0.0,
-                    text: format!("> {line}"),
+                    text: echo,
                 });
-                let (said, done) = terminal.startup_line(&line);
-                screen.say(&said)?;
-                transcript.extend(said.into_iter().map(|text| Shown { t_s: 0.0, text }));
-                if let Some(startup) = done {
+                let answer = terminal.startup_line(&line);
+                if let Some(reply) = answer.refused {
+                    refused.push(format!(
+                        "input line {n}: the controller refused '{}': {reply}",
+                        excerpt(&line)
+                    ));
+                }
+                screen.say(&answer.lines)?;
+                transcript.extend(
+                    answer
+                        .lines
+                        .into_iter()
+                        .map(|text| Shown { t_s: 0.0, text }),
+                );
+                if let Some(startup) = answer.started {
                     break startup;
                 }
             }
@@ -193,7 +209,7 @@ pub fn run<'a>(
         }
         screen.status(&sim)?;
         let line = match rx.recv_timeout(Duration::from_millis(50)) {
-            Ok(Typed::Line(line)) => line,
+            Ok(Typed::Line(_, line)) => line,
             Ok(Typed::NotText(n)) => {
                 screen.say(&[not_text(n)])?;
                 continue;
@@ -207,7 +223,7 @@ pub fn run<'a>(
         }
         let mut lines = Vec::new();
         if !typing {
-            lines.push(format!("[{}] > {line}", clock(sim.now())));
+            lines.push(format!("[{}] > {}", clock(sim.now()), excerpt(&line)));
         }
         if let Some(seconds) = trimmed.strip_prefix("run ") {
             match seconds.trim().parse::<f64>() {
@@ -220,7 +236,7 @@ pub fn run<'a>(
                 }
                 _ => lines.push(format!(
                     "run takes simulated seconds (0 or more), got '{}'",
-                    seconds.trim()
+                    excerpt(seconds.trim())
                 )),
             }
             lines.push(format!("[{}] {}", clock(sim.now()), sim.status()));

@@ -347,6 +347,10 @@ fn staged_value<T: Scalar>(code: Code, station: &Station<T>) -> String {
 /// A number as the LCD shows it: at most three decimals, no trailing zeros.
 #[must_use]
 pub fn trim(v: f64) -> String {
+    if v.abs() >= 1e9 {
+        // 1e300 as typed, not in 301 digits.
+        return crate::cli::number(v);
+    }
     let s = format!("{v:.3}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" { "0".into() } else { s.into() }

@@ -39,7 +39,8 @@
 //! # Files, as the data flows
 //! - [`plant`]: the room, the tank and the three-point motor;
 //! - [`script`]: the timed operator input and the built-in demonstrations;
-//! - [`terminal`], [`keypad`]: the operator interfaces of the source;
+//! - [`startup`], [`terminal`], [`keypad`]: the operator interfaces of the source (the start-up
+//!   dialogue, each answer checked when typed; the terminal after it; the keypad and LCD);
 //! - [`controller`]: `Station` on the plant, and the script's run;
 //! - [`report`]: what a run gives, and the loop's measures;
 //! - [`interactive`]: the controller at a live terminal;
@@ -58,6 +59,7 @@ pub mod picture;
 pub mod plant;
 pub mod report;
 pub mod script;
+pub mod startup;
 pub mod summary;
 pub mod terminal;
 

@@ -111,7 +111,9 @@ impl std::fmt::Display for Refusal {
         write!(
             f,
             "script line {}: the controller refused '{}': {}",
-            self.line, self.input, self.reply
+            self.line,
+            crate::cli::excerpt(&self.input),
+            self.reply
         )
     }
 }

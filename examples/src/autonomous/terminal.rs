@@ -1,98 +1,15 @@
-//! The terminal dialogue of the 1985 controller: the start-up questions with the source's limits
-//! and messages, the live status line, the change mode, and alarm acknowledge with C.
+//! The terminal of the 1985 controller: the start-up dialogue ([`super::startup`], each answer
+//! checked as it is typed), the live status line, the change mode, and alarm acknowledge with C.
 //!
 //! The dialogue is a line-by-line state machine: every line the operator types goes to
 //! [`Terminal::startup_line`] and then [`Terminal::running_line`], which return
 //! what the terminal prints.
 
-use regler_pid::{Action, Code, Config, Kind, Parameters, Scalar, Scaling, Station};
+use regler_pid::{Action, Code, Scalar, Station};
 
 use super::keypad::trim;
-
-/// The start-up questions, in the source's order (type-dependent ones are skipped).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[allow(missing_docs, reason = "each variant is the question its prompt asks")]
-pub enum Question {
-    Type,
-    S,
-    Ymin,
-    Ymax,
-    Dymax,
-    Kp,
-    Ti,
-    Td,
-    ScaleMin,
-    ScaleMax,
-    Direction,
-    Rfel,
-    Win,
-    Start,
-}
-
-impl Question {
-    fn prompt(self) -> &'static str {
-        match self {
-            Question::Type => "REGULATOR TYPE (P,I,D,PI,PD,ID,PID) ?>",
-            Question::S => "SAMPLING PERIOD S (1-255 SEC.) ?>",
-            Question::Ymin => "LOW OUTPUT LIMIT YMIN (0-10 VOLT) ?>",
-            Question::Ymax => "HIGH OUTPUT LIMIT YMAX (0-10 VOLT) ?>",
-            Question::Dymax => "MAX DER. OUTPUT Dymax (VOLT) ?>",
-            Question::Kp => "GAIN KP ?>",
-            Question::Ti => "INTEGRATION TIME TI ?>",
-            Question::Td => "DERIVATION TIME TD ?>",
-            Question::ScaleMin => "SCALE MIN ?>",
-            Question::ScaleMax => "SCALE MAX ?>",
-            Question::Direction => "DIRECT OR REVERSE UTYPE (DIR/REV) ?>",
-            Question::Rfel => "MAX ERROR RFEL (SCALE UNIT) ?>",
-            Question::Win => "REFERENCE WIN (SCALEMIN-SCALEMAX) ?>",
-            Question::Start => "TO START THE REGULATOR PRESS (CR) !",
-        }
-    }
-
-    fn next(self, kind: Kind) -> Question {
-        let order = [
-            Question::Type,
-            Question::S,
-            Question::Ymin,
-            Question::Ymax,
-            Question::Dymax,
-            Question::Kp,
-            Question::Ti,
-            Question::Td,
-            Question::ScaleMin,
-            Question::ScaleMax,
-            Question::Direction,
-            Question::Rfel,
-            Question::Win,
-            Question::Start,
-        ];
-        let at = order
-            .iter()
-            .position(|q| *q == self)
-            .unwrap_or(order.len() - 1);
-        order
-            .iter()
-            .skip(at + 1)
-            .copied()
-            .find(|q| match q {
-                Question::Kp => kind.has_p(),
-                Question::Ti => kind.has_i(),
-                Question::Td => kind.has_d(),
-                _ => true,
-            })
-            .unwrap_or(Question::Start)
-    }
-}
-
-/// What the start-up dialogue has collected.
-#[derive(Clone, Copy, Debug)]
-pub struct Draft {
-    config: Config,
-    scale_min: f64,
-    scale_max: f64,
-    rfel: f64,
-    win: f64,
-}
+pub use super::startup::{Answer, Question, Startup};
+use super::startup::{Draft, words};
 
 /// The terminal, from power-on to the change mode.
 #[derive(Clone, Debug)]
@@ -111,15 +28,6 @@ pub enum Terminal {
         /// The parameter on screen.
         code: Code,
     },
-}
-
-/// The start-up dialogue's result.
-#[derive(Clone, Copy, Debug)]
-pub struct Startup {
-    /// The controller parameters.
-    pub params: Parameters,
-    /// The measurement scale.
-    pub scaling: Scaling,
 }
 
 /// The order of the change mode's questions.
@@ -143,22 +51,20 @@ impl Default for Terminal {
 }
 
 impl Terminal {
-    /// A terminal at power-on, asking the first question.
+    /// A terminal at power-on, asking the first question, for a controller without a night
+    /// set-back.
     #[must_use]
     pub fn new() -> Terminal {
-        let config = Config {
-            dymax: None,
-            ..Config::default()
-        };
+        Terminal::with_night_setback(0.0)
+    }
+
+    /// A terminal at power-on for a controller that will run with `night_setback` (the scale
+    /// the dialogue asks for must hold it).
+    #[must_use]
+    pub fn with_night_setback(night_setback: f64) -> Terminal {
         Terminal::Startup {
             question: Question::Type,
-            draft: Draft {
-                config,
-                scale_min: 0.0,
-                scale_max: 0.0,
-                rfel: 0.0,
-                win: 0.0,
-            },
+            draft: Draft::new(night_setback),
         }
     }
 
@@ -179,149 +85,23 @@ impl Terminal {
         }
     }
 
-    /// One line typed during start-up. Returns the printed lines, and the start-up result once
-    /// the operator pressed CR at the end.
-    pub fn startup_line(&mut self, line: &str) -> (Vec<String>, Option<Startup>) {
+    /// One line typed during start-up: what the terminal prints, whether it refused the
+    /// answer, and the start-up result once the operator pressed CR at the end (the terminal
+    /// then runs).
+    pub fn startup_line(&mut self, line: &str) -> Answer {
         let Terminal::Startup { question, draft } = self else {
-            return (vec!["WRONG COMMAND".into()], None);
+            return Answer {
+                lines: vec!["WRONG COMMAND".into()],
+                refused: Some("WRONG COMMAND".into()),
+                started: None,
+            };
         };
-        let (q, mut d) = (*question, *draft);
-        let mut out = Vec::new();
-        let answer = line.trim();
-        let number = answer.parse::<f64>().ok().filter(|v| v.is_finite());
-        let ok = match (q, number) {
-            (Question::Type, _) => match Kind::parse(answer) {
-                Some(kind) => {
-                    d.config.kind = kind;
-                    true
-                }
-                None => {
-                    out.push("WRONG TYPE".into());
-                    false
-                }
-            },
-            (Question::S, Some(s)) if (1.0..=255.0).contains(&s) => {
-                d.config.h = s;
-                true
-            }
-            (Question::S, Some(s)) => {
-                out.push(if s > 255.0 { "SMAX=255" } else { "SMIN=1" }.into());
-                false
-            }
-            (Question::Ymin, Some(v)) if (0.0..=10.0).contains(&v) => {
-                d.config.ymin = v;
-                true
-            }
-            (Question::Ymax, Some(v)) if (0.0..=10.0).contains(&v) && v > d.config.ymin => {
-                d.config.ymax = v;
-                true
-            }
-            (Question::Ymax, Some(v)) if (0.0..=10.0).contains(&v) => {
-                out.push("YMAX <= YMIN ! TRY AGAIN".into());
-                false
-            }
-            (Question::Ymin | Question::Ymax, Some(v)) => {
-                out.push(
-                    if v < 0.0 {
-                        "MINIMUM = 0 V"
-                    } else {
-                        "MAXIMUM = 10 V"
-                    }
-                    .into(),
-                );
-                out.push("TRY AGAIN".into());
-                false
-            }
-            (Question::Dymax, Some(v)) => {
-                let v = v.abs();
-                d.config.dymax = if v == 0.0 { None } else { Some(v) };
-                true
-            }
-            (Question::Kp, Some(v)) => range(&mut out, v, -1.0, 10_000.0, "KP")
-                .then(|| d.config.k = v)
-                .is_some(),
-            (Question::Ti, Some(v)) if v > 0.0 => range(&mut out, v, 0.0, 1e7, "TI")
-                .then(|| d.config.ti = v)
-                .is_some(),
-            (Question::Ti, Some(_)) => {
-                out.push("TIMIN>0".into());
-                false
-            }
-            (Question::Td, Some(v)) => range(&mut out, v, 0.0, 1e7, "TD")
-                .then(|| d.config.td = v)
-                .is_some(),
-            (Question::ScaleMin, Some(v)) => {
-                d.scale_min = v;
-                true
-            }
-            (Question::ScaleMax, Some(v)) if v > d.scale_min => {
-                d.scale_max = v;
-                true
-            }
-            (Question::ScaleMax, Some(_)) => {
-                out.push("SCALEMAX <= SCALEMIN ! TRY AGAIN".into());
-                false
-            }
-            (Question::Direction, _) => match answer.to_ascii_uppercase().as_str() {
-                "DIR" => {
-                    d.config.action = Action::Direct;
-                    true
-                }
-                "REV" => {
-                    d.config.action = Action::Reverse;
-                    true
-                }
-                _ => {
-                    out.push("TRY AGAIN".into());
-                    false
-                }
-            },
-            (Question::Rfel, Some(v)) => {
-                d.rfel = v.abs();
-                true
-            }
-            (Question::Win, Some(v)) if v >= d.scale_min && v <= d.scale_max => {
-                d.win = v;
-                true
-            }
-            (Question::Win, Some(v)) => {
-                out.push(if v > d.scale_max {
-                    format!("SCALEMAX={}", trim(d.scale_max))
-                } else {
-                    format!("SCALEMIN={}", trim(d.scale_min))
-                });
-                false
-            }
-            (Question::Start, _) if answer.is_empty() => {
-                let scaling = match Scaling::new(d.scale_min, d.scale_max) {
-                    Ok(s) => s,
-                    Err(e) => return (vec![e.to_string()], None),
-                };
-                let params = Parameters {
-                    config: d.config,
-                    setpoint: d.win,
-                    rfel: d.rfel,
-                    night_setback: 0.0,
-                };
-                *self = Terminal::Running;
-                return (
-                    vec!["REGULATOR STARTED".into()],
-                    Some(Startup { params, scaling }),
-                );
-            }
-            (Question::Start, _) => false,
-            (_, None) => {
-                out.push("TRY AGAIN".into());
-                false
-            }
-        };
-        let next = if ok { q.next(d.config.kind) } else { q };
-        out.push(next.prompt().into());
-        *self = Terminal::Startup {
-            question: next,
-            draft: d,
-        };
-        (out, None)
+        let (next, answer) = super::startup::answer(*question, draft, line);
+        *question = next;
+        if answer.started.is_some() {
+            *self = Terminal::Running;
+        }
+        answer
     }
 
     /// The live status line.
@@ -374,7 +154,7 @@ impl Terminal {
                         out.push(if code == Code::Typ {
                             " WRONG TYPE".into()
                         } else {
-                            format!(" {e}")
+                            format!(" {}", words(e))
                         });
                         out.push("TRY AGAIN".into());
                         out.push(prompt(code, station));
@@ -410,18 +190,6 @@ impl Terminal {
     }
 }
 
-fn range(out: &mut Vec<String>, v: f64, lo: f64, hi: f64, name: &str) -> bool {
-    if v > hi {
-        out.push(format!("{name}MAX={}", trim(hi)));
-        false
-    } else if v < lo {
-        out.push(format!("{name}MIN={}", trim(lo)));
-        false
-    } else {
-        true
-    }
-}
-
 fn prompt<T: Scalar>(code: Code, station: &Station<T>) -> String {
     let shadow = station.staged().shadow();
     let value = match code {
@@ -443,16 +211,16 @@ fn prompt<T: Scalar>(code: Code, station: &Station<T>) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use regler_pid::OperatorLimits;
+    use regler_pid::{Action, Kind, OperatorLimits};
 
     fn start(answers: &[&str]) -> (Terminal, Vec<String>, Option<Startup>) {
         let mut t = Terminal::new();
         let mut printed = Vec::new();
         let mut result = None;
         for a in answers {
-            let (out, done) = t.startup_line(a);
-            printed.extend(out);
-            result = result.or(done);
+            let answer = t.startup_line(a);
+            printed.extend(answer.lines);
+            result = result.or(answer.started);
         }
         (t, printed, result)
     }
