@@ -299,16 +299,17 @@ pub enum ConfigError<F = f64> {
     /// product or sum the update computes can reach beyond the type's range for a set-point and
     /// measurement on the scale (a fixed-point `Station` would saturate it and lose the
     /// set-point): `K·(b·r − y)` = 60 000 for K = 2 on a 0..30 000 scale in `I16F16`.
-    /// Checked by [`Station`](crate::Station) at start-up and at every commit.
+    /// Checked by [`Station`](crate::Station) at start-up and at every commit; the bounds, their
+    /// order and the term each names are listed in [`Station::new`](crate::Station::new).
     OutOfReach {
         /// The parameter that sets the term.
         parameter: Parameter,
         /// Its value.
         value: F,
-        /// The term, e.g. "K·(b·r − y)".
+        /// The term, e.g. "K·(b·r − y)": the first of the listed bounds that exceeds the limit.
         term: &'static str,
-        /// The largest magnitude the term can reach on the scale (an upper bound, computed in
-        /// the configuration's type).
+        /// That bound: the largest magnitude the term can reach on the scale (an upper bound,
+        /// computed in the configuration's type as listed).
         reach: F,
     },
 }

@@ -804,22 +804,44 @@ impl<T: Scalar, F: Real> Station<T, F> {
     /// count once, at start-up only.
     ///
     /// The configuration must also be within reach ([`ConfigError::OutOfReach`], checked here
-    /// and at every commit, where a refusal keeps the old set active): for a set-point r and a
-    /// measurement y anywhere on the scale, none of these bounds may exceed L = `T::MAX`·(1 −
-    /// 2⁻⁸) (32 640 for `I16F16`): |b·r − y| and the change of y − c·r between two samples
-    /// (summed on every sample, whatever the kind, so a set-point weight b outside 0..1 or a
-    /// c of 1 on a wide scale can be refused with a small gain); |u − v| (S + v);
-    /// |K|·|b·r − y|; |K·(1 − b)|·|r| (kinds with I); |y − c·r|;
-    /// the derivative term (ad·[`STATE_BOUND`](crate::STATE_BOUND)·S plus bd times the range
-    /// of y − c·r); v = P + I + D with I at its bound; |K|·h/Ti·span; h/Tt·(S + v); and the
-    /// integral's update with its centre — where S = max(ymax − ymin, |ymin|, |ymax|) and each
-    /// bound takes r and y at the scale's corners independently. It is conservative (the worst
-    /// case over the whole scale, states at their bounds), so some configurations that would
-    /// never saturate are refused. It applies to saturating types only ([`Scalar::SATURATES`]):
-    /// in `f32` and `f64` an overflow is an infinity, which the update catches (output held,
+    /// and at every commit, where a refusal keeps the old set active): no product or sum the
+    /// update forms may come within 2⁻⁸ of the end of `T`'s range for a set-point r and a
+    /// measurement y anywhere on the scale lo..=hi (SCALEMIN..=SCALEMAX). The rule, computed in
+    /// `F`: let m = max(|lo|, |hi|); the corners be the four pairs (r, y) with r and y each lo
+    /// or hi; e = y − c·r, with e⁺ its largest and e⁻ its smallest value over the corners;
+    /// A = max(|ymin|, |ymax|) and B = [`STATE_BOUND`](crate::STATE_BOUND)·max(ymax − ymin, A)
+    /// (the states' bound); g = K for kinds with P and 1 for kinds without, and Kp = |K| for
+    /// kinds with P and 0 for kinds without. Each of these bounds must be at most
+    /// L = `T::MAX`·(1 − 2⁻⁸) (32 640 for `I16F16`, about 2.14·10⁹ for `I32F32`):
+    ///
+    /// 1. `b·r − y` (parameter b): E = max(|b·r − y| over the corners, |b|·m);
+    /// 2. `(y − c·r) − (y_old − c·r_old)` (c): e⁺ − e⁻;
+    /// 3. `u − v` (K): A + V;
+    /// 4. `K·(b·r − y)` (K): P = Kp·E;
+    /// 5. `K·(1 − b)·r` (b): O = Kp·|1 − b|·m for kinds with I, 0 for kinds without;
+    /// 6. `y − c·r` (c): max(|e⁺|, |e⁻|, |c|·m);
+    /// 7. `the derivative term` (Td): D = Td/(Td + N·h)·B + |g|·Td·N/(Td + N·h)·(e⁺ − e⁻) for
+    ///    kinds with D and Td > 0, 0 otherwise;
+    /// 8. `P + I + D` (K): V = P + I + D, where I = Ic + (ymax − ymin)/2 + B is the integral's
+    ///    bound around its centre Ic = O + |ymin + ymax|/2;
+    /// 9. `K·h/Ti·(r − y)` (Ti): |g|·h/Ti·(hi − lo) for kinds with I, 0 for kinds without;
+    /// 10. `h/Tt·(u − v)` (Tt, or h when Tt is unset): a·(A + V) with a = h/Tt (1 when Tt is
+    ///     unset) for kinds with I, 0 for kinds without;
+    /// 11. `the integral's update` (K): I + (9) + (10) + Ic.
+    ///
+    /// The error is for the first bound in this order that exceeds L (or is NaN): it names the
+    /// term (the text above), the parameter and its value, and `reach` is the bound. Since
+    /// A + V is at least P, O, D and V, bounds 4, 5, 7 and 8 are never the first; they are
+    /// listed as the sums they bound. Bounds 1 and 2 hold for every kind (the update forms
+    /// b·r − y and the change of y − c·r on every sample), so a set-point weight b outside
+    /// 0..1 or a c of 1 on a wide scale can be refused with a small gain. It is conservative
+    /// (the worst case over the whole scale, r and y at opposite ends at once, states at their
+    /// bounds), so some configurations that would never saturate are refused. It applies to
+    /// saturating types only ([`Scalar::SATURATES`]): in `f32` and `f64` an overflow is an
+    /// infinity, which the update catches (output held,
     /// [`Faults::overflow`](crate::Faults::overflow)), so float stations skip it and link none
     /// of it. The crate README gives the closed form for a PI on a scale 0..M and worked
-    /// examples.
+    /// examples; `tests/reach_model.rs` checks this list term by term against a model.
     pub fn new(
         params: Parameters<F>,
         scaling: Scaling<F>,
