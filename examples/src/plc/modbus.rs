@@ -601,7 +601,7 @@ fn client(mut stream: TcpStream, state: &Mutex<Shared>, idle: Duration) -> Resul
             Ok(())
         });
         if let Err(code) = verdict {
-            stream.write_all(&exception(&buf, function, code))?;
+            send(&mut stream, &exception(&buf, function, code), idle)?;
             continue;
         }
         let asked = requests(pdu);
@@ -637,9 +637,31 @@ fn client(mut stream: TcpStream, state: &Mutex<Shared>, idle: Duration) -> Resul
             if let Some(u) = response.get_mut(6) {
                 *u = unit;
             }
-            stream.write_all(&response)?;
+            send(&mut stream, &response, idle)?;
         }
     }
+}
+
+/// Writes `bytes` within `idle` in all: a client that takes its reply a little at a time is
+/// closed when the whole reply has not gone by then (a socket's write timeout alone restarts
+/// with every partial write).
+fn send(stream: &mut TcpStream, bytes: &[u8], idle: Duration) -> Result<(), Ended> {
+    let deadline = Instant::now() + idle;
+    let mut sent = 0;
+    while sent < bytes.len() {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if left.is_zero() {
+            return Err(Ended::Idle);
+        }
+        stream.set_write_timeout(Some(left))?;
+        match stream.write(&bytes[sent..]) {
+            Ok(0) => return Err(Ended::Other),
+            Ok(n) => sent += n,
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(e) => return Err(e.into()),
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
