@@ -216,7 +216,7 @@ pub(super) fn answer(q: Question, d: &mut Draft, line: &str) -> (Question, Answe
             true
         }
         (Question::Ymax, Some(v)) if (0.0..=10.0).contains(&v) => {
-            out.push("YMAX <= YMIN ! TRY AGAIN".into());
+            out.push(LIMITS_RULE.into());
             false
         }
         (Question::Ymin | Question::Ymax, Some(v)) => {
@@ -382,8 +382,8 @@ fn check(q: Question, d: &Draft) -> Result<Option<Startup>, (String, Question)> 
         rfel: if q >= Question::Rfel { d.rfel } else { 0.0 },
         night_setback,
     };
-    match Station::<Number>::new(params, scaling, OperatorLimits::default()) {
-        Ok(_) => Ok((q == Question::Start).then_some(Startup { params, scaling })),
+    match try_on::<Number>(params, scaling, OperatorLimits::default()) {
+        Ok(()) => Ok((q == Question::Start).then_some(Startup { params, scaling })),
         Err(e) => {
             let back = match &e {
                 EditError::ScaleUnrepresentable { .. } | EditError::NightSetback(_) => {
@@ -405,6 +405,25 @@ fn check(q: Question, d: &Draft) -> Result<Option<Startup>, (String, Question)> 
         }
     }
 }
+
+/// Tries `params` on a [`Station`] of the number type `T`, as the controller will run them: the
+/// check of every start-up answer (`T` = [`Number`]) and of every change-mode answer and commit
+/// (the run's station type). A commit of a set that passes lands at the next sample: the
+/// station's commit checks what its constructor checks.
+///
+/// # Errors
+/// The library's refusal.
+pub fn try_on<T: Scalar>(
+    params: Parameters,
+    scaling: Scaling,
+    limits: OperatorLimits,
+) -> Result<(), EditError> {
+    Station::<T>::new(params, scaling, limits).map(|_| ())
+}
+
+/// The source's rule for the output limits, with its message: YMAX must be above YMIN (equal
+/// limits pin the output). The start-up and the change mode both hold it.
+pub const LIMITS_RULE: &str = "YMAX <= YMIN ! TRY AGAIN";
 
 /// Whether the controller's number type holds `v` (strictly inside its range, as the
 /// controller's own scale check asks) and `v` is 0 or a normal number (as [`Scaling`] asks).
