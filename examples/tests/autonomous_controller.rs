@@ -1080,6 +1080,22 @@ fn each_reproducer_of_the_change_mode_tells_the_truth() {
     );
     assert_eq!(prompted(&stdout, "YMIN"), Some(0.0), "{stdout}");
     assert_change_truth("ymin=ymax", &stdout, &stderr, "YMIN", "10");
+    // RFEL: negative, or beyond the controller's f32, refused with the range.
+    for typed in ["-1", "1e300", "-1e300"] {
+        let mut answers: Vec<&str> = vec!["", "30"];
+        answers.extend(std::iter::repeat_n("", 7));
+        answers.extend([typed, ""]);
+        let (stdout, stderr) = change_run("rfel", &answers);
+        assert!(
+            stderr.contains(&format!(
+                "refused '{typed}': ILLEGAL VALUE: RFEL must be 0 or from 1.17549e-38 to \
+                 3.40282e38 (the controller's number type), got {typed}"
+            )),
+            "{stderr}"
+        );
+        assert_change_truth("rfel", &stdout, &stderr, "RFEL", typed);
+        assert_eq!(prompted(&stdout, "RFEL"), Some(5.0), "{stdout}");
+    }
 }
 
 #[test]

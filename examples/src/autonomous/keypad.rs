@@ -257,6 +257,9 @@ pub fn stage<T: Scalar>(
             code,
             typed: text.trim().to_string(),
         })?;
+    if code == Code::Rfel {
+        super::startup::rfel_rule(value).map_err(StageError::Rule)?;
+    }
     let mut trial = *station.staged();
     trial.edit(code, value).map_err(StageError::Edit)?;
     try_staged::<T>(station, trial, code)
@@ -294,6 +297,8 @@ pub enum StageError {
     },
     /// YMAX would not be above YMIN ([`super::startup::LIMITS_RULE`]).
     Limits,
+    /// A rule of the terminal's own (RFEL's range), with its message.
+    Rule(String),
 }
 
 impl StageError {
@@ -301,9 +306,9 @@ impl StageError {
     #[must_use]
     pub fn display_message(&self) -> &'static str {
         match self {
-            StageError::Edit(EditError::NotANumber(_)) | StageError::NotANumber { .. } => {
-                "ILLEGAL VALUE"
-            }
+            StageError::Edit(EditError::NotANumber(_))
+            | StageError::NotANumber { .. }
+            | StageError::Rule(_) => "ILLEGAL VALUE",
             StageError::Limits => "YMAX <= YMIN",
             StageError::Edit(e) => e.display_message(),
         }
@@ -315,6 +320,7 @@ impl std::fmt::Display for StageError {
         match self {
             StageError::Edit(e) => e.fmt(f),
             StageError::Limits => f.write_str(super::startup::LIMITS_RULE),
+            StageError::Rule(why) => f.write_str(why),
             StageError::NotANumber { code, typed } => {
                 write!(
                     f,
