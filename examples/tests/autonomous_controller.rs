@@ -948,3 +948,186 @@ fn an_unfinished_dialogue_names_its_refused_answers_and_the_open_question() {
         assert!(longest_digits(&err) < 20, "{err}");
     }
 }
+
+/// The start-up of the attack reproducers (PID, S 10, WIN 20), as script lines at time 0.
+const CHANGE_STARTUP: [&str; 14] = [
+    "PID", "10", "0", "10", "10", "1", "600", "60", "0", "40", "DIR", "5", "20", "",
+];
+
+/// The change mode's questions after TYP for a PID controller, in order.
+const CHANGE_CODES: [&str; 9] = [
+    "WIN", "S", "KP", "TI", "TD", "YMIN", "YMAX", "DYMAX", "RFEL",
+];
+
+/// Runs a script: the start-up, then at 100 s a change mode whose answers are `answers` (one a
+/// second), then at 1000 s a second change mode answered with CR only (its prompts show the
+/// values it starts from). Returns (stdout, stderr).
+fn change_run(name: &str, answers: &[&str]) -> (String, String) {
+    let mut script: String = CHANGE_STARTUP
+        .iter()
+        .map(|a| format!("0 term {a}\n"))
+        .collect();
+    script.push_str("100 term Y\n");
+    for (i, a) in answers.iter().enumerate() {
+        script.push_str(&format!("{} term {a}\n", 101 + i));
+    }
+    script.push_str("1000 term Y\n");
+    for i in 0..12 {
+        script.push_str(&format!("{} term\n", 1001 + i));
+    }
+    let path = temp_file(name, &script);
+    let out = controller(&[
+        "--script",
+        path.to_str().unwrap(),
+        "--no-picture",
+        "--hours",
+        "0.5",
+    ]);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    );
+    assert!(out.status.success(), "{name}: {stderr}");
+    (stdout, stderr)
+}
+
+/// The value a prompt `CODE=v    CODE ?>` shows, the last time it was asked.
+fn prompted(stdout: &str, code: &str) -> Option<f64> {
+    let head = format!("] {code}=");
+    stdout
+        .lines()
+        .rfind(|l| l.contains(&head) && l.ends_with(&format!("{code} ?>")))
+        .and_then(|l| {
+            l.split(&head)
+                .nth(1)?
+                .split_whitespace()
+                .next()?
+                .parse()
+                .ok()
+        })
+}
+
+fn commits(stdout: &str) -> usize {
+    let line = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("commits "))
+        .unwrap_or_else(|| panic!("no commits line: {stdout}"));
+    line.split_whitespace().nth(1).unwrap().parse().unwrap()
+}
+
+/// The truth of a change-mode run: PARAMETERS COMMITTED as often as the controller committed;
+/// the second change mode shows WIN 30 exactly when a commit landed; and `code` shows `value`
+/// (as the controller holds it) unless stderr names the line that typed it.
+fn assert_change_truth(name: &str, stdout: &str, stderr: &str, code: &str, typed: &str) {
+    let said = stdout.matches("PARAMETERS COMMITTED").count();
+    let landed = commits(stdout);
+    assert_eq!(
+        said, landed,
+        "{name}: said committed {said}×, commits {landed}\n{stdout}"
+    );
+    // The first change mode (WIN 30 and the value) and the second (nothing changed) commit.
+    assert_eq!(
+        landed, 2,
+        "{name}: the valid WIN 30 must be committed\n{stdout}\n{stderr}"
+    );
+    assert_eq!(prompted(stdout, "WIN"), Some(30.0), "{name}\n{stdout}");
+    let refused = stderr.contains(&format!("refused '{typed}'"));
+    if refused {
+        return;
+    }
+    let value: f64 = typed.parse().unwrap();
+    let expect = match code {
+        "DYMAX" | "RFEL" => value.abs(),
+        _ => value,
+    };
+    let shown = prompted(stdout, code);
+    assert_eq!(
+        shown,
+        Some(expect),
+        "{name}: {code} {typed} was not refused, so the display must show it in force\n{stdout}\n{stderr}"
+    );
+}
+
+#[test]
+fn each_reproducer_of_the_change_mode_tells_the_truth() {
+    for (file, code, typed) in [
+        ("repro_change_mode.txt", "TI", "5e-324"),
+        ("repro_dymax.txt", "DYMAX", "1e300"),
+    ] {
+        let mut answers: Vec<&str> = vec!["", "30"];
+        let at = CHANGE_CODES.iter().position(|c| *c == code).unwrap();
+        answers.extend(std::iter::repeat_n("", at - 1));
+        answers.push(typed);
+        answers.extend(std::iter::repeat_n("", CHANGE_CODES.len() - at));
+        let (stdout, stderr) = change_run(file, &answers);
+        assert!(
+            stderr.contains(&format!("refused '{typed}': ILLEGAL VALUE")),
+            "{file}: {typed} must be refused when typed\n{stderr}"
+        );
+        assert!(
+            stderr.contains("(asked again)") || stderr.contains("TRY AGAIN"),
+            "{stderr}"
+        );
+        assert_change_truth(file, &stdout, &stderr, code, typed);
+    }
+    // YMIN 10 with YMAX 10: the start-up's rule, with its message.
+    let mut answers: Vec<&str> = vec!["", "30", "", "", "", "", "10"];
+    answers.extend(std::iter::repeat_n("", 5));
+    let (stdout, stderr) = change_run("repro_ymin_eq_ymax.txt", &answers);
+    assert!(
+        stderr.contains("refused '10': YMAX <= YMIN ! TRY AGAIN"),
+        "{stderr}\n{stdout}"
+    );
+    assert_eq!(prompted(&stdout, "YMIN"), Some(0.0), "{stdout}");
+    assert_change_truth("ymin=ymax", &stdout, &stderr, "YMIN", "10");
+    // RFEL: negative, or beyond the controller's f32, refused with the range.
+    for typed in ["-1", "1e300", "-1e300"] {
+        let mut answers: Vec<&str> = vec!["", "30"];
+        answers.extend(std::iter::repeat_n("", 7));
+        answers.extend([typed, ""]);
+        let (stdout, stderr) = change_run("rfel", &answers);
+        assert!(
+            stderr.contains(&format!(
+                "refused '{typed}': ILLEGAL VALUE: RFEL must be 0 or from 1.17549e-38 to \
+                 3.40282e38 (the controller's number type), got {typed}"
+            )),
+            "{stderr}"
+        );
+        assert_change_truth("rfel", &stdout, &stderr, "RFEL", typed);
+        assert_eq!(prompted(&stdout, "RFEL"), Some(5.0), "{stdout}");
+    }
+}
+
+#[test]
+fn change_mode_grid_of_extreme_values_commits_what_it_shows() {
+    let values = ["1e300", "-1e300", "1e-45", "5e-324", "0", "NaN"];
+    let mut failures = Vec::new();
+    for (at, code) in CHANGE_CODES.iter().enumerate().skip(1) {
+        for typed in values {
+            // TYP kept, WIN 30, then CR up to `code`, the value, one CR more (it answers the same
+            // question when the value is refused, the next one when not), then CR to the end.
+            let mut answers: Vec<&str> = vec!["", "30"];
+            answers.extend(std::iter::repeat_n("", at - 1));
+            answers.push(typed);
+            answers.extend(std::iter::repeat_n("", CHANGE_CODES.len() - at));
+            let name = format!("grid-{code}-{typed}");
+            let (stdout, stderr) = change_run(&name, &answers);
+            let result = std::panic::catch_unwind(|| {
+                assert_change_truth(&name, &stdout, &stderr, code, typed);
+            });
+            if result.is_err() {
+                failures.push(name);
+            }
+        }
+    }
+    // YMAX equal to YMIN (0): refused with the source's message.
+    let mut answers: Vec<&str> = vec!["", "30", "", "", "", "", "", "0"];
+    answers.extend(std::iter::repeat_n("", 3));
+    let (stdout, stderr) = change_run("grid-ymax-eq", &answers);
+    assert!(
+        stderr.contains("refused '0': YMAX <= YMIN ! TRY AGAIN"),
+        "{stderr}"
+    );
+    assert_change_truth("grid-ymax-eq", &stdout, &stderr, "YMAX", "0");
+    assert!(failures.is_empty(), "untruthful: {failures:?}");
+}

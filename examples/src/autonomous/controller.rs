@@ -139,6 +139,8 @@ pub struct Sim {
     /// Lines the operator saw.
     pub shown: Vec<Shown>,
     refused: Vec<Refusal>,
+    /// The script line (and its text) that made the pending commit, to name if it is refused.
+    commit_line: Option<(usize, String)>,
 }
 
 impl Sim {
@@ -174,6 +176,7 @@ impl Sim {
             },
             shown: Vec::new(),
             refused: Vec::new(),
+            commit_line: None,
         })
     }
 
@@ -211,9 +214,12 @@ impl Sim {
                 .map(|s| s.text.as_str())
                 .filter(|t| !t.starts_with("> ") && !t.ends_with("?>"))
                 .collect();
+            if self.station.staged().commit_pending() {
+                self.commit_line = Some((event.line, line.clone()));
+            }
             if reply
                 .iter()
-                .any(|t| t.contains("WRONG") || t.contains("TRY AGAIN"))
+                .any(|t| t.contains("WRONG") || t.contains("TRY AGAIN") || t.contains("REFUSED"))
             {
                 self.refused.push(Refusal {
                     line: event.line,
@@ -232,6 +238,7 @@ impl Sim {
         let (dt, scaling) = (self.dt, self.scaling);
         if t + 1e-9 >= self.next_sample {
             let before = self.station.commits();
+            let pending = self.station.staged().commit_pending();
             if self.outdoor_compensation && self.process == ProcessKind::Room {
                 // Heat the building loses now, in heater volts: (set-point − outdoor) / gain.
                 let loss = (self.station.setpoint() - self.plant.outdoor(t)) / HEATER_GAIN;
@@ -253,6 +260,20 @@ impl Sim {
             }
             if self.station.commits() > before {
                 self.commits.push(t);
+            } else if let (true, Some(e)) = (pending, self.station.refused_commit()) {
+                // The library refused the commit at this sample: the operator is told, the
+                // edits are discarded, and a script names the line that committed.
+                let why = super::startup::words(e);
+                let lines = super::terminal::refused_commit(&mut self.station, &why);
+                if let Some((line, input)) = self.commit_line.take().filter(|(l, _)| *l > 0) {
+                    self.refused.push(Refusal {
+                        line,
+                        input,
+                        reply: lines.join(" / "),
+                    });
+                }
+                self.shown
+                    .extend(lines.into_iter().map(|text| Shown { t_s: t, text }));
             }
             self.next_sample += self.station.staged().active().config.h;
             self.samples += 1;

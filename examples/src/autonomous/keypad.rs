@@ -12,7 +12,7 @@
 //! The source's example `* 21 * A 150 A D` changes the set-point WIN to 150: `*` enters keypad
 //! mode ("CODE=?"), `21 *` shows WIN, `A` asks "WIN=?", `150 A` stages the value, `D` commits.
 
-use regler_pid::{Code, EditError, Kind, Scalar, Station};
+use regler_pid::{Code, EditError, Kind, Scalar, Staged, Station};
 
 /// Characters on one line of the LCD.
 pub const LCD_WIDTH: usize = 24;
@@ -244,10 +244,9 @@ pub fn stage<T: Scalar>(
 ) -> Result<(), StageError> {
     if code == Code::Typ {
         let kind = Kind::parse(text).ok_or(StageError::Edit(EditError::NotANumber(code)))?;
-        return station
-            .staged_mut()
-            .edit_kind(kind)
-            .map_err(StageError::Edit);
+        let mut trial = *station.staged();
+        trial.edit_kind(kind).map_err(StageError::Edit)?;
+        return try_staged::<T>(station, trial, code);
     }
     let value = text
         .trim()
@@ -258,10 +257,30 @@ pub fn stage<T: Scalar>(
             code,
             typed: text.trim().to_string(),
         })?;
-    station
-        .staged_mut()
-        .edit(code, value)
-        .map_err(StageError::Edit)
+    if code == Code::Rfel {
+        super::startup::rfel_rule(value).map_err(StageError::Rule)?;
+    }
+    let mut trial = *station.staged();
+    trial.edit(code, value).map_err(StageError::Edit)?;
+    try_staged::<T>(station, trial, code)
+}
+
+/// Puts an edited copy of the staged set in place if the controller can run its shadow set
+/// (the start-up's check, [`super::startup::try_on`]) and YMAX stays above YMIN; else refuses
+/// it, the staged set unchanged.
+fn try_staged<T: Scalar>(
+    station: &mut Station<T>,
+    trial: Staged,
+    code: Code,
+) -> Result<(), StageError> {
+    let shadow = *trial.shadow();
+    if matches!(code, Code::Ymin | Code::Ymax) && shadow.config.ymax <= shadow.config.ymin {
+        return Err(StageError::Limits);
+    }
+    super::startup::try_on::<T>(shadow, trial.scaling(), trial.limits())
+        .map_err(StageError::Edit)?;
+    *station.staged_mut() = trial;
+    Ok(())
 }
 
 /// Why an entry was refused: the crate's reason, or text that is no number at all.
@@ -276,6 +295,10 @@ pub enum StageError {
         /// What the operator typed.
         typed: String,
     },
+    /// YMAX would not be above YMIN ([`super::startup::LIMITS_RULE`]).
+    Limits,
+    /// A rule of the terminal's own (RFEL's range), with its message.
+    Rule(String),
 }
 
 impl StageError {
@@ -283,9 +306,10 @@ impl StageError {
     #[must_use]
     pub fn display_message(&self) -> &'static str {
         match self {
-            StageError::Edit(EditError::NotANumber(_)) | StageError::NotANumber { .. } => {
-                "ILLEGAL VALUE"
-            }
+            StageError::Edit(EditError::NotANumber(_))
+            | StageError::NotANumber { .. }
+            | StageError::Rule(_) => "ILLEGAL VALUE",
+            StageError::Limits => "YMAX <= YMIN",
             StageError::Edit(e) => e.display_message(),
         }
     }
@@ -295,6 +319,8 @@ impl std::fmt::Display for StageError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             StageError::Edit(e) => e.fmt(f),
+            StageError::Limits => f.write_str(super::startup::LIMITS_RULE),
+            StageError::Rule(why) => f.write_str(why),
             StageError::NotANumber { code, typed } => {
                 write!(
                     f,
@@ -353,7 +379,12 @@ pub fn trim(v: f64) -> String {
     }
     let s = format!("{v:.3}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" { "0".into() } else { s.into() }
+    match s {
+        // A value that is not 0 is never shown as 0 (1e-45 as typed).
+        "0" | "-0" if v != 0.0 => crate::cli::number(v),
+        "-0" => "0".into(),
+        _ => s.into(),
+    }
 }
 
 /// Splits a key sequence as written in scripts ("* 21 * A 150 A D") into single keys.

@@ -216,7 +216,7 @@ pub(super) fn answer(q: Question, d: &mut Draft, line: &str) -> (Question, Answe
             true
         }
         (Question::Ymax, Some(v)) if (0.0..=10.0).contains(&v) => {
-            out.push("YMAX <= YMIN ! TRY AGAIN".into());
+            out.push(LIMITS_RULE.into());
             false
         }
         (Question::Ymin | Question::Ymax, Some(v)) => {
@@ -285,10 +285,17 @@ pub(super) fn answer(q: Question, d: &mut Draft, line: &str) -> (Question, Answe
                 false
             }
         },
-        (Question::Rfel, Some(v)) => {
-            d.rfel = v.abs();
-            true
-        }
+        (Question::Rfel, Some(v)) => match rfel_rule(v) {
+            Ok(()) => {
+                d.rfel = v;
+                true
+            }
+            Err(why) => {
+                out.push(why);
+                out.push("TRY AGAIN".into());
+                false
+            }
+        },
         (Question::Win, Some(v)) if v >= d.scale_min && v <= d.scale_max => {
             d.win = v;
             true
@@ -382,8 +389,8 @@ fn check(q: Question, d: &Draft) -> Result<Option<Startup>, (String, Question)> 
         rfel: if q >= Question::Rfel { d.rfel } else { 0.0 },
         night_setback,
     };
-    match Station::<Number>::new(params, scaling, OperatorLimits::default()) {
-        Ok(_) => Ok((q == Question::Start).then_some(Startup { params, scaling })),
+    match try_on::<Number>(params, scaling, OperatorLimits::default()) {
+        Ok(()) => Ok((q == Question::Start).then_some(Startup { params, scaling })),
         Err(e) => {
             let back = match &e {
                 EditError::ScaleUnrepresentable { .. } | EditError::NightSetback(_) => {
@@ -399,11 +406,85 @@ fn check(q: Question, d: &Draft) -> Result<Option<Startup>, (String, Question)> 
                     number(d.scale_max - d.scale_min),
                     number(v)
                 ),
+                // The library names the parameter whose term fails (`ti = 8`, maybe a stand-in
+                // not yet asked): the answer refused is named first.
+                EditError::Config(c) => match answered(q, d) {
+                    Some(v)
+                        if !c
+                            .to_string()
+                            .to_lowercase()
+                            .starts_with(&q.name().to_lowercase()) =>
+                    {
+                        format!(
+                            "ILLEGAL VALUE: {} = {} refused: {}",
+                            q.name(),
+                            number(v),
+                            words(c)
+                        )
+                    }
+                    _ => words(e),
+                },
                 e => words(e),
             };
             refuse(why, back)
         }
     }
+}
+
+/// Tries `params` on a [`Station`] of the number type `T`, as the controller will run them: the
+/// check of every start-up answer (`T` = [`Number`]) and of every change-mode answer and commit
+/// (the run's station type). A commit of a set that passes lands at the next sample: the
+/// station's commit checks what its constructor checks.
+///
+/// # Errors
+/// The library's refusal.
+pub fn try_on<T: Scalar>(
+    params: Parameters,
+    scaling: Scaling,
+    limits: OperatorLimits,
+) -> Result<(), EditError> {
+    Station::<T>::new(params, scaling, limits).map(|_| ())
+}
+
+/// The source's rule for the output limits, with its message: YMAX must be above YMIN (equal
+/// limits pin the output). The start-up and the change mode both hold it.
+pub const LIMITS_RULE: &str = "YMAX <= YMIN ! TRY AGAIN";
+
+/// RFEL must be 0 or more and held by the controller's number type (the alarm compares it in
+/// the scale's units); the start-up and the change mode both hold this.
+///
+/// # Errors
+/// The message, with the range.
+pub fn rfel_rule(v: f64) -> Result<(), String> {
+    if v >= 0.0 && held(v) {
+        Ok(())
+    } else {
+        Err(format!(
+            "ILLEGAL VALUE: RFEL must be 0 or from {} to {} (the controller's number type), \
+             got {}",
+            number_of(Number::MIN_POSITIVE),
+            number_of(Number::MAX),
+            number(v)
+        ))
+    }
+}
+
+/// The number answered to `q` (`None` for the questions that take words).
+fn answered(q: Question, d: &Draft) -> Option<f64> {
+    Some(match q {
+        Question::S => d.config.h,
+        Question::Ymin => d.config.ymin,
+        Question::Ymax => d.config.ymax,
+        Question::Dymax => d.config.dymax.unwrap_or(0.0),
+        Question::Kp => d.config.k,
+        Question::Ti => d.config.ti,
+        Question::Td => d.config.td,
+        Question::ScaleMin => d.scale_min,
+        Question::ScaleMax => d.scale_max,
+        Question::Rfel => d.rfel,
+        Question::Win => d.win,
+        Question::Type | Question::Direction | Question::Start => return None,
+    })
 }
 
 /// Whether the controller's number type holds `v` (strictly inside its range, as the
@@ -489,6 +570,24 @@ mod tests {
         assert_eq!(
             words("KP must be within -1..10000, got 2.5"),
             "KP must be within -1..10000, got 2.5"
+        );
+    }
+
+    #[test]
+    fn a_refusal_names_the_answer_refused() {
+        let mut d = Draft::new(0.0);
+        let (q, a) = answer(Question::Kp, &mut d, "1.4e-45");
+        assert_eq!(q, Question::Kp);
+        assert!(
+            a.lines[0].starts_with("ILLEGAL VALUE: KP = 1.4e-45 refused: "),
+            "{:?}",
+            a.lines
+        );
+        let (_, a) = answer(Question::Rfel, &mut d, "-1");
+        assert!(
+            a.lines[0].contains("RFEL must be 0 or from"),
+            "{:?}",
+            a.lines
         );
     }
 

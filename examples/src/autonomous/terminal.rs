@@ -5,9 +5,9 @@
 //! [`Terminal::startup_line`] and then [`Terminal::running_line`], which return
 //! what the terminal prints.
 
-use regler_pid::{Action, Code, Scalar, Station};
+use regler_pid::{Action, Code, EditError, Scalar, Station};
 
-use super::keypad::trim;
+use super::keypad::{StageError, trim};
 pub use super::startup::{Answer, Question, Startup};
 use super::startup::{Draft, words};
 
@@ -143,20 +143,25 @@ impl Terminal {
             Terminal::Changing { code } => {
                 let code = *code;
                 if answer.eq_ignore_ascii_case("Q") {
-                    station.staged_mut().commit();
                     *self = Terminal::Running;
-                    return vec!["PARAMETERS COMMITTED".into()];
+                    return commit(station);
                 }
                 let mut out = Vec::new();
                 if !answer.is_empty() {
                     let result = super::keypad::stage(station, code, answer);
                     if let Err(e) = result {
-                        out.push(if code == Code::Typ {
+                        let why = if code == Code::Typ
+                            && matches!(e, StageError::Edit(EditError::NotANumber(_)))
+                        {
                             " WRONG TYPE".into()
                         } else {
                             format!(" {}", words(e))
-                        });
-                        out.push("TRY AGAIN".into());
+                        };
+                        let again = why.ends_with("TRY AGAIN");
+                        out.push(why);
+                        if !again {
+                            out.push("TRY AGAIN".into());
+                        }
                         out.push(prompt(code, station));
                         return out;
                     }
@@ -179,15 +184,48 @@ impl Terminal {
                         out.push(prompt(next, station));
                     }
                     None => {
-                        station.staged_mut().commit();
                         *self = Terminal::Running;
-                        out.push("PARAMETERS COMMITTED".into());
+                        out.extend(commit(station));
                     }
                 }
                 out
             }
         }
     }
+}
+
+/// The end of the change mode: the shadow set is committed if the controller can run it (the
+/// check the station's commit makes at the next sample, [`super::startup::try_on`]); else the
+/// commit is refused, the edits are discarded and the values in force are shown.
+fn commit<T: Scalar>(station: &mut Station<T>) -> Vec<String> {
+    let staged = station.staged();
+    match super::startup::try_on::<T>(*staged.shadow(), staged.scaling(), staged.limits()) {
+        Ok(()) => {
+            station.staged_mut().commit();
+            vec!["PARAMETERS COMMITTED".into()]
+        }
+        Err(e) => refused_commit(station, &words(e)),
+    }
+}
+
+/// A commit the controller refused (`why`): the edits are discarded, the terminal says so and
+/// shows the values in force.
+pub fn refused_commit<T: Scalar>(station: &mut Station<T>, why: &str) -> Vec<String> {
+    station.staged_mut().discard();
+    vec![format!("COMMIT REFUSED: {why}"), in_force(station)]
+}
+
+/// The parameters the controller runs on, as one line.
+#[must_use]
+pub fn in_force<T: Scalar>(station: &Station<T>) -> String {
+    let active = station.staged().active();
+    let mut text = format!("IN FORCE: TYP={}", active.config.kind);
+    for code in &CHANGE_ORDER[1..] {
+        if let Some(v) = station.staged().active_value(*code) {
+            text.push_str(&format!(" {}={}", code.name(), trim(v)));
+        }
+    }
+    text
 }
 
 fn prompt<T: Scalar>(code: Code, station: &Station<T>) -> String {
@@ -293,5 +331,43 @@ mod tests {
         st.sample(40.0);
         assert_eq!(st.value(Code::Win), Some(60.0));
         assert_eq!(t.running_line("C", &mut st), ["ALARM ACKNOWLEDGED"]);
+    }
+
+    #[test]
+    fn a_commit_the_controller_cannot_run_is_refused_visibly() {
+        let (mut t, _, result) = start(&[
+            "PI", "10", "0", "10", "0", "3", "60", "0", "100", "DIR", "5", "50", "",
+        ]);
+        let s = result.unwrap();
+        let limits = OperatorLimits::default();
+        let mut st = Station::<f32>::new(s.params, s.scaling, limits).unwrap();
+        // Typed: refused at its question, asked again.
+        t.running_line("Y", &mut st);
+        t.running_line("", &mut st);
+        t.running_line("60", &mut st);
+        t.running_line("", &mut st);
+        t.running_line("", &mut st);
+        let out = t.running_line("5e-324", &mut st);
+        assert!(
+            out.iter().any(|l| l.contains("ILLEGAL VALUE: ti")),
+            "{out:?}"
+        );
+        assert_eq!(out.last().map(String::as_str), Some("TI=60    TI ?>"));
+        assert_eq!(t.running_line("Q", &mut st), ["PARAMETERS COMMITTED"]);
+        st.sample(40.0);
+        assert_eq!((st.commits(), st.value(Code::Win)), (1, Some(60.0)));
+        // Staged past the terminal's check: the commit is refused, the edits discarded.
+        st.staged_mut().edit(Code::Ti, 5e-324).unwrap();
+        t.running_line("Y", &mut st);
+        let out = t.running_line("Q", &mut st);
+        assert!(
+            out[0].starts_with("COMMIT REFUSED: ILLEGAL VALUE: ti"),
+            "{out:?}"
+        );
+        assert!(
+            out[1].contains("WIN=60") && out[1].contains("TI=60"),
+            "{out:?}"
+        );
+        assert!(!st.staged().commit_pending() && !st.staged().edited());
     }
 }
