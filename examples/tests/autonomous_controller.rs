@@ -508,6 +508,34 @@ fn controller_with_input(args: &[&str], stdin: &[u8]) -> std::process::Output {
 
 const TANK_ANSWERS: &str = "PI\n1\n0\n10\n0\n1.5\n30\n0\n100\nDIR\n5\n50\n\n";
 
+/// A commit keyed just before `quit`, with no sample after it: the screen said PARAMETERS
+/// COMMITTED, so the summary says the commit was keyed but never came into force (it read only
+/// "commits 0", as if the operator had committed nothing).
+#[test]
+fn a_commit_keyed_just_before_quit_is_reported_pending() {
+    let mut input = TANK_ANSWERS.as_bytes().to_vec();
+    input.extend_from_slice(b"Y\n\n60\nQ\nquit\n");
+    let out = controller_with_input(
+        &[
+            "--interactive",
+            "--process",
+            "tank",
+            "--no-svg",
+            "--speed",
+            "1",
+        ],
+        &input,
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("PARAMETERS COMMITTED"), "{text}");
+    assert!(text.contains("  commits            0\n"), "{text}");
+    assert!(
+        text.contains("a commit was keyed but the run ended before the next sample"),
+        "{text}"
+    );
+}
+
 /// Interactive with piped stdin: the summary says what was simulated (not the 48 h asked for),
 /// no commit reads "0", the status line comes once after an empty line and once after `run N`,
 /// and a line that is not UTF-8 is reported without ending the dialogue.

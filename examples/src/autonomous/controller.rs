@@ -331,6 +331,7 @@ impl Sim {
             settling_time_s: settling,
             alarms: self.station.alarm().raised(),
             commits_s: self.commits.clone(),
+            commit_pending_at_end: self.station.staged().commit_pending(),
             samples: self.samples,
             faults: self.station.pid().faults().to_string(),
             picture: self.picture.clone(),

@@ -76,6 +76,8 @@ pub struct SimReport {
     pub alarms: u32,
     /// Times (s) at which a commit took effect.
     pub commits_s: Vec<f64>,
+    /// A commit was keyed but the run ended before the sample that puts it into force.
+    pub commit_pending_at_end: bool,
     /// Samples taken.
     pub samples: u64,
     /// Controller faults seen.

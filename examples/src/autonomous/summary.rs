@@ -77,6 +77,12 @@ pub fn summary(r: &SimReport) -> String {
             commits.join(", ")
         );
     }
+    if r.commit_pending_at_end {
+        let _ = writeln!(
+            s,
+            "  (a commit was keyed but the run ended before the next sample put it into force)"
+        );
+    }
     let _ = writeln!(s, "  samples            {}", r.samples);
     let _ = writeln!(s, "  controller faults  {}", r.faults);
     let _ = write!(s, "LCD at the end:\n{}", r.final_lcd);
