@@ -216,7 +216,7 @@ fn registers<const R: usize>(values: &[u8]) -> Host<R> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(300))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 300 }))]
 
     /// Any single damaged byte (any change of its 11-bit frame) in the first sequences: once the
     /// next full sequence is through, every register is right.
@@ -295,7 +295,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(100))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 100 }))]
 
     /// A MOT wire that chatters (any level flipped at any poll, repeating): keys are still never
     /// duplicated or altered, and the displays keep being refreshed; once the wire behaves again,
@@ -343,7 +343,7 @@ fn no_two_consecutive(mut glitch: Vec<bool>) -> Vec<bool> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(150))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 150 }))]
 
     /// Issue 19 (attack, item 2): a MOT line that lies on any polls (any repeating pattern of
     /// lies, and patterns in which no two consecutive polls lie), a panel that samples SÄN only
@@ -837,7 +837,7 @@ fn every_short_periodic_mot_pattern_keeps_the_displays_refreshed() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(200))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 200 }))]
 
     /// Any MOT pattern (random levels, random run lengths), any accepted configuration: the
     /// display is refreshed at least every bound.
@@ -1053,7 +1053,7 @@ fn two_flips_out_of_sync_are_right_within_two_sequences() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(6))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 6 }))]
 
     /// The same guarantee with random register values, new ones every sequence, for 1, 2 and 7
     /// registers: every single bit and bit pair over two sequences and the idle byte times on
@@ -1110,7 +1110,7 @@ fn measure_wrong_values_after_two_flips() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(300))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 300 }))]
 
     /// A key pressed at any moment raises SÄN within one sequence (`R + 2` byte times; the
     /// simulation's 100 µs steps add up to one step per byte) plus one MOT poll.

@@ -172,7 +172,7 @@ fn direction(d: Drive, c: &ActuatorConfig) -> Result<i8, TestCaseError> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(512))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 512 }))]
 
     /// Issue 19 item 11, positional form: for any configuration, any history of targets and any
     /// target then held, every pulse is `Stop` or lasts `min_pulse..=h` (and more than 0), the
@@ -469,7 +469,7 @@ fn follows_the_motor<F: regler_pid::Real>(
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 256 }))]
 
     /// Issue 19 item 11, attack finding 1, as a property: for every accepted configuration
     /// (extreme ratios included), any mix of positional and velocity requests, in f32 and

@@ -99,7 +99,7 @@ fn refused_for_reach<T: Scalar>(config: Config<f64>, m: f64) -> Option<bool> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(2000))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 2000 }))]
 
     /// README: "a PI on a scale 0..M ... is accepted exactly when max(M, v, R) ≤ L"
     /// (outside a 10⁻⁶ band around L, where rounding decides), in I16F16 and I32F32; `f32`

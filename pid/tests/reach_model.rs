@@ -287,7 +287,7 @@ fn configuration(l: f64) -> impl Strategy<Value = (Config<f64>, f64, f64)> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(2000))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 2000 }))]
 
     /// `Station::new` docs: accepted exactly when bounds 1–11 are at most L; refused with the
     /// first bound above L as `reach`, its term, parameter and value — in I16F16.

@@ -606,7 +606,7 @@ mod identify_properties {
     use proptest::prelude::*;
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(200))]
+        #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 200 }))]
 
         /// Any FOPDT process (K of either sign over four decades, T over three, L from 0 to 3T,
         /// 30 to 3 000 samples per T + L, logged 8 to 20 time constants past the dead time,
@@ -786,7 +786,7 @@ mod refusals {
     use proptest::prelude::*;
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(200))]
+        #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 200 }))]
 
         /// Attack finding 2: a first-order response with an oscillation still going at the end
         /// of the log (amplitude 2 % to 50 % of the change, any phase, noise up to 0.2 %) is

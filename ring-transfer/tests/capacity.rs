@@ -38,7 +38,7 @@ fn sets() -> impl Strategy<Value = (Vec<Load>, LinkSpec)> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(300))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 300 }))]
 
     /// The largest n ≤ limit whose n copies pass `check`, found by scanning every n.
     #[test]

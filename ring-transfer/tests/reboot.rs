@@ -137,7 +137,7 @@ fn a_board_rebooted_after_half_the_counter_range_is_placed_where_it_stopped() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(512))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 512 }))]
 
     /// With frames lost, repeated and reordered around the reboot (then a clean link), the
     /// reboot at any step — while the first board's hellos and syncs are still on the link too:

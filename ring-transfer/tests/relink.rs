@@ -146,7 +146,7 @@ fn a_board_the_faulty_link_put_stand_alone_before_the_outage() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 256 }))]
 
     /// Any configuration (wider ranges), any moment of the outage, frames late by up to a few
     /// more steps before the master comes back.

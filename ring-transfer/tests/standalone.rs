@@ -99,7 +99,7 @@ fn silences() -> impl Strategy<Value = Vec<(u64, u64)>> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(128))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 128 }))]
 
     /// Every row is whole from one source — master or local — except that a row the master's
     /// failure cut short may end in fallback items; the master's rows are consecutive rows of

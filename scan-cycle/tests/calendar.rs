@@ -129,7 +129,7 @@ fn lines() -> impl proptest::strategy::Strategy<Value = Vec<Start<usize>>> {
 }
 
 proptest! {
-    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(96))]
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 96 }))]
 
     /// Every start the clock reaches runs once — late if the clock jumped over it, in the order
     /// of its time —, a line runs at most once per check with its earlier times counted missed,
