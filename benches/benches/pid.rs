@@ -1,7 +1,7 @@
 //! regler's `Pid` in f32, f64, I16F16 and I32F32 with every feature on, one closed-loop sample
 //! (controller + first-order plant) each; and the fair comparison with the `pid` crate's P+I+D
-//! update: one generic loop function for both, four workloads, the update inlined into the loop
-//! or called once per sample.
+//! update: the same loop for both, four workloads compiled into it, in the firmware shape (one
+//! out-of-line call per sample) and the inlined shape.
 
 use std::hint::black_box;
 
@@ -23,33 +23,47 @@ fn closed_loop(c: &mut Criterion) {
     group.finish();
 }
 
-/// The fair loop: one generic loop function for both controllers, 1 000 samples of each shape
-/// per iteration (`regler_benches::pid_shapes`); subtract the `none` row (the loop's own work)
-/// to get a controller's time per update.
+/// The fair comparison with the `pid` crate (`regler_benches::pid_shapes`): the same loop,
+/// plant and workload for both, 1 000 samples per iteration, in two shapes — `firmware`
+/// (run-time configuration, the controller kept in memory across iterations, one out-of-line call
+/// per sample) and `inlined` (the loop builds and owns a controller from the constant
+/// configuration). Subtract the `none` row (the loop's own work, same shape) for a controller's
+/// time per update.
 fn shapes(c: &mut Criterion) {
-    use regler_benches::pid_shapes::{Call, Null, Shape, anchor, regler, run_with};
+    use regler_benches::pid_shapes::{Anchor, Build, Call, Null, Shape, run, run_firmware};
+    use regler_pid::Pid;
     for (name, shape) in [
         ("constant", Shape::Constant),
         ("steps", Shape::Steps),
         ("noise", Shape::Noise),
         ("saturation", Shape::Saturation),
     ] {
-        for (how, call) in [("", Call::Inlined), ("_call", Call::PerSample)] {
-            let mut group = c.benchmark_group(format!("pid_shape_{name}{how}_1000_samples"));
-            group.throughput(Throughput::Elements(1000));
-            let mut r = regler();
-            group.bench_function("regler_f32", |b| {
-                b.iter(|| run_with(&mut r, call, black_box(shape), 1000))
-            });
-            let mut p = anchor();
-            group.bench_function("pid_crate_f32", |b| {
-                b.iter(|| run_with(&mut p, call, black_box(shape), 1000))
-            });
-            group.bench_function("none", |b| {
-                b.iter(|| run_with(&mut Null, call, black_box(shape), 1000))
-            });
-            group.finish();
-        }
+        let mut group = c.benchmark_group(format!("pid_shape_{name}_firmware_1000_samples"));
+        group.throughput(Throughput::Elements(1000));
+        let mut r = <Pid<f32> as Build>::runtime();
+        group.bench_function("regler_f32", |b| {
+            b.iter(|| run_firmware(&mut r, black_box(shape), 1000))
+        });
+        let mut p = Anchor::runtime();
+        group.bench_function("pid_crate_f32", |b| {
+            b.iter(|| run_firmware(&mut p, black_box(shape), 1000))
+        });
+        group.bench_function("none", |b| {
+            b.iter(|| run_firmware(&mut Null, black_box(shape), 1000))
+        });
+        group.finish();
+        let mut group = c.benchmark_group(format!("pid_shape_{name}_inlined_1000_samples"));
+        group.throughput(Throughput::Elements(1000));
+        group.bench_function("regler_f32", |b| {
+            b.iter(|| run::<Pid<f32>>(Call::Inlined, black_box(shape), 1000))
+        });
+        group.bench_function("pid_crate_f32", |b| {
+            b.iter(|| run::<Anchor>(Call::Inlined, black_box(shape), 1000))
+        });
+        group.bench_function("none", |b| {
+            b.iter(|| run::<Null>(Call::Inlined, black_box(shape), 1000))
+        });
+        group.finish();
     }
 }
 

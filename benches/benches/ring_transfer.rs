@@ -1,6 +1,7 @@
-//! The ring beside its anchors, in one run: a `receive` + `next` pair on a half-full 256-slot
-//! byte ring — the crate's `Ring` (statistics on) and split halves, `heapless::spsc::Queue` used
-//! directly and through its own halves, a plain array ring; two threads moving 10 million items
+//! The ring beside its anchors, in one run: `receive` + `next` pairs on a half-full byte ring —
+//! the crate's `Ring<u8, 256>` (statistics on) and split halves, `heapless::spsc::Queue<u8, 256>`
+//! (and `<u8, 257>`, which holds 256 like `Ring<u8, 256>`) used directly and through its own
+//! halves, a plain array ring — in the firmware and the inlined shape; two threads moving 10 million items
 //! through the split halves and through heapless's; and the master's scheduling decision with 8,
 //! 80 and 500 slaves.
 
@@ -8,58 +9,31 @@ use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use heapless::spsc::Queue;
-use regler_benches::ring_pairs::{ArrayRing, SLOTS};
-use regler_ring_transfer::{Master, Report, Ring, SharedRing, SlaveParams};
+use regler_benches::ring_pairs::{SLOTS, Shape, run};
+use regler_ring_transfer::{Master, Report, SharedRing, SlaveParams};
 
-macro_rules! pair_bench {
-    ($group:expr, $name:expr, |$v:ident| $push:expr, $pop:expr) => {{
-        for _ in 0..SLOTS / 2 {
-            let $v = 0u8;
-            let _ = $push;
-        }
-        let mut x = 0u8;
-        $group.bench_function($name, |b| {
-            b.iter(|| {
-                x = x.wrapping_add(1);
-                let $v = black_box(x);
-                let _ = $push;
-                black_box($pop)
-            })
-        });
-    }};
-}
-
+/// 10 000 pairs per iteration (the ring's set-up, a box and 128 items, is about 1 % of that) through the shared loop (`regler_benches::ring_pairs`), each
+/// contestant in both shapes: `firmware` (each operation an out-of-line call on state in memory)
+/// and `inlined` (a tight loop owning the ring).
 fn pairs(c: &mut Criterion) {
-    let mut group = c.benchmark_group("ring/pair");
-    group.throughput(Throughput::Elements(1));
-    let mut ring: Box<Ring<u8, SLOTS>> = Box::default();
-    pair_bench!(group, "regler Ring", |v| ring.receive(v), ring.next());
-    let mut queue: Box<Queue<u8, { SLOTS + 1 }>> = Box::default();
-    pair_bench!(
-        group,
-        "heapless spsc Queue",
-        |v| queue.enqueue(v),
-        queue.dequeue()
-    );
-    let mut shared: Box<SharedRing<u8, { SLOTS + 1 }>> = Box::default();
-    let (mut filler, mut drainer) = shared.split();
-    pair_bench!(
-        group,
-        "regler Filler+Drainer",
-        |v| filler.receive(v),
-        drainer.next()
-    );
-    let mut queue: Box<Queue<u8, { SLOTS + 1 }>> = Box::default();
-    let (mut producer, mut consumer) = queue.split();
-    pair_bench!(
-        group,
-        "heapless Producer+Consumer",
-        |v| producer.enqueue(v),
-        consumer.dequeue()
-    );
-    let mut array = Box::<ArrayRing>::default();
-    pair_bench!(group, "plain array ring", |v| array.push(v), array.pop());
-    group.finish();
+    for (shape_name, shape) in [("firmware", Shape::Firmware), ("inlined", Shape::Inlined)] {
+        let mut group = c.benchmark_group(format!("ring/pair/{shape_name}/10000"));
+        group.throughput(Throughput::Elements(10_000));
+        for (name, which) in [
+            ("regler Ring 256", "ring"),
+            ("heapless spsc Queue 256", "spsc"),
+            ("heapless spsc Queue 257", "spsc-257"),
+            ("regler Filler+Drainer 256", "split"),
+            ("heapless Producer+Consumer 256", "spsc-split"),
+            ("plain array ring 256", "array"),
+            ("none (the loop alone)", "none"),
+        ] {
+            group.bench_function(name, |b| {
+                b.iter(|| run(black_box(which), black_box(shape), 10_000))
+            });
+        }
+        group.finish();
+    }
 }
 
 const TRANSFER: u32 = 10_000_000;
@@ -97,14 +71,14 @@ fn two_threads(c: &mut Criterion) {
     group.throughput(Throughput::Elements(u64::from(TRANSFER)));
     group.bench_function("regler Filler+Drainer", |b| {
         b.iter(|| {
-            let mut shared: Box<SharedRing<u32, { SLOTS + 1 }>> = Box::default();
+            let mut shared: Box<SharedRing<u32, SLOTS>> = Box::default();
             let (mut filler, mut drainer) = shared.split();
             black_box(transfer(|x| filler.receive(x), || drainer.next()))
         })
     });
     group.bench_function("heapless Producer+Consumer", |b| {
         b.iter(|| {
-            let mut queue: Box<Queue<u32, { SLOTS + 1 }>> = Box::default();
+            let mut queue: Box<Queue<u32, SLOTS>> = Box::default();
             let (mut producer, mut consumer) = queue.split();
             black_box(transfer(|x| producer.enqueue(x), || consumer.dequeue()))
         })
