@@ -15,7 +15,7 @@
 //!   equally visible to the optimizer (which may keep a plain ring's indices in registers; it
 //!   cannot do that through heapless's atomics).
 //!
-//! Every contestant runs the same generic loop ([`pairs`]): the same item sequence, the same
+//! Every contestant runs the same generic loop (`pairs`): the same item sequence, the same
 //! harness work (item counter, `black_box` on the item, an order-sensitive checksum of what came
 //! out), so the difference between two rows is the rings' own work.
 
