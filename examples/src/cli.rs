@@ -281,7 +281,13 @@ pub fn write_picture(path: &Path, bytes: impl AsRef<[u8]>) -> Result<(), Stop> {
 /// (a 10 MB script line is not echoed whole).
 #[must_use]
 pub fn excerpt(s: &str) -> String {
-    shown(s)
+    let t = s.trim();
+    if t.chars().count() > 24 {
+        let head: String = t.chars().take(20).collect();
+        format!("{head}…")
+    } else {
+        t.to_owned()
+    }
 }
 
 /// A refusal of `option`'s value, in the one style every program uses (`--crates: must be from
@@ -322,18 +328,6 @@ pub fn number(x: f64) -> String {
     if s == "-0" { "0".into() } else { s.into() }
 }
 
-/// The input as the user typed it, shortened when it is long (a 400-digit number is named by
-/// its first digits).
-fn shown(s: &str) -> String {
-    let t = s.trim();
-    if t.chars().count() > 24 {
-        let head: String = t.chars().take(20).collect();
-        format!("{head}…")
-    } else {
-        t.to_owned()
-    }
-}
-
 /// A clap value parser for a real number in `lo..=hi` (finite; negative numbers need
 /// `allow_hyphen_values = true` on the argument so that `-1` reaches it).
 pub fn real(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
@@ -346,7 +340,7 @@ pub fn real(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + 
                 "must be from {} to {}, got {}",
                 number(lo),
                 number(hi),
-                shown(s)
+                excerpt(s)
             ))
         }
     }
@@ -364,7 +358,7 @@ pub fn real_above(lo: f64, hi: f64) -> impl Fn(&str) -> Result<f64, String> + Cl
                 "must be more than {} and at most {}, got {}",
                 number(lo),
                 number(hi),
-                shown(s)
+                excerpt(s)
             ))
         }
     }
@@ -376,7 +370,7 @@ where
     T: Copy + PartialOrd + fmt::Display + std::str::FromStr + Send + Sync + 'static,
 {
     move |s: &str| {
-        let out_of_range = || format!("must be from {lo} to {hi}, got {}", shown(s));
+        let out_of_range = || format!("must be from {lo} to {hi}, got {}", excerpt(s));
         let t = s.trim().replace('_', "");
         match t.parse::<T>() {
             Ok(x) if x >= lo && x <= hi => Ok(x),
@@ -392,7 +386,7 @@ where
             }
             Err(_) => Err(format!(
                 "must be a whole number from {lo} to {hi}, got {}",
-                shown(s)
+                excerpt(s)
             )),
         }
     }
@@ -401,8 +395,8 @@ where
 fn parse_real(s: &str) -> Result<f64, String> {
     match s.trim().replace('_', "").parse::<f64>() {
         Ok(x) if x.is_finite() => Ok(x),
-        Ok(_) => Err(format!("must be a finite number, got {}", shown(s))),
-        Err(_) => Err(format!("must be a number, got {}", shown(s))),
+        Ok(_) => Err(format!("must be a finite number, got {}", excerpt(s))),
+        Err(_) => Err(format!("must be a number, got {}", excerpt(s))),
     }
 }
 

@@ -9,11 +9,3 @@ pub mod knitter;
 pub mod mailbag;
 pub mod plc;
 pub mod svg;
-
-/// The end of every example's `main`: success (also when the reader closed the pipe), or the
-/// error on stderr (prefixed with the program's name) and exit code 2, never a panic. See
-/// [`cli::finish`].
-#[must_use]
-pub fn finish<E: Into<cli::Stop>>(program: &str, result: Result<(), E>) -> std::process::ExitCode {
-    cli::finish(program, result.map_err(Into::into))
-}

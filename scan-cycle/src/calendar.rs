@@ -558,7 +558,9 @@ impl<P> Start<P> {
 /// assert_eq!(started, [("morning schedule", 2), ("lamp test", 1)]);
 /// assert_eq!((checked.on_time, checked.late, checked.missed), (0, 2, 0));
 /// let earlier = DateTime::new(2026, 11, 23, 5, 58, 0)?;      // set back: nothing runs twice
-/// assert_eq!(table.check(&earlier, |_| unreachable!()).behind_minutes, 4);
+/// let mut reran = 0;
+/// assert_eq!(table.check(&earlier, |_| reran += 1).behind_minutes, 4);
+/// assert_eq!(reran, 0);
 /// # Ok::<(), regler_scan_cycle::InvalidDateTime>(())
 /// ```
 #[derive(Clone, Debug)]
