@@ -45,6 +45,7 @@
 
 mod docks;
 mod picture;
+pub mod plant;
 mod readers;
 mod report;
 mod scenarios;
