@@ -2,5 +2,6 @@
 //! switches at code readers, buffer lanes, emptying stations, dock chains, six panels and the
 //! control program on the regler crates.
 
+pub mod map;
 pub mod map_data;
 pub mod operator;

@@ -1,0 +1,338 @@
+//! The plant map: an SVG picture of a run over the plant's graph ([`MapData`]).
+//!
+//! Places stand in columns by [`MapNode::layer`](super::map_data::MapNode::layer): loading
+//! stations left, readers, buffer lanes, then emptying stations, docks and the manual station
+//! right; the return rail is a bar along the bottom, fed from the right and feeding the loading
+//! stations on the left. Each rail section is drawn as wide as its trolleys per hour (linear,
+//! the legend gives the scale; a section no trolley used is a thin dashed line). A red circle in
+//! a place's box counts the sacks misdelivered there, an orange square the trolleys a reader
+//! rejected to the manual station (area grows with the count, the number beside it); a yellow
+//! warning triangle on a box's corner is an alarm still on at the end of the run.
+//!
+//! Every colour has one meaning: the place kinds' pale fills, one dark colour for rails, red,
+//! orange and yellow only for the marks. Every number printed is finite: zero or unknown hours
+//! give "no time" and thin rails, an empty map says so.
+
+mod draw;
+mod layout;
+
+use super::map_data::{MapData, MapEdge, MapNode, NodeKind};
+use draw::{empty, header, legend, place, rails, subtitle};
+use layout::{BOX_H, Layout};
+
+const TITLE_FONT: f64 = 22.0;
+const NAME_FONT: f64 = 15.0;
+const SMALL_FONT: f64 = 13.0;
+const COUNT_FONT: f64 = 13.0;
+const LEGEND_FONT: f64 = 13.0;
+
+/// Rails, every one of them.
+const RAIL: &str = "#34495e";
+/// Misdelivered sacks: the circle and its number.
+const MISDELIVERED: (&str, &str) = ("#d62728", "#a01515");
+/// Rejected trolleys: the square and its number.
+const REJECTED: (&str, &str) = ("#ff7f0e", "#b35300");
+/// An alarm on at the end of the run.
+const ALARM: &str = "#ffd400";
+
+/// Narrowest and widest rail, px.
+const MIN_W: f64 = 1.5;
+const MAX_W: f64 = 14.0;
+/// Largest marker radius, px.
+const MARK_R: f64 = 10.0;
+/// Padding inside a box.
+const PAD: f64 = 10.0;
+
+/// Draws `data` as an SVG map titled `title` (name the run in it: "voting, 24 h, seed 1977").
+/// Never panics; an empty map or zero hours gives a picture that says so.
+#[must_use]
+pub fn draw(data: &MapData, title: &str) -> String {
+    if data.nodes.is_empty() {
+        return empty(title);
+    }
+    let rates = Rates::new(data);
+    let marks = MarkScale::new(data);
+    let content: Vec<f64> = data
+        .nodes
+        .iter()
+        .enumerate()
+        .map(|(i, node)| content_width(node, &rates.node_label(i)))
+        .collect();
+    let routes: Vec<Route> = data.edges.iter().map(|e| Route::of(data, e)).collect();
+    let dip = if routes.contains(&Route::Back) {
+        70.0
+    } else {
+        0.0
+    };
+    let layout = Layout::new(data, &content, dip);
+    let mut svg = header(title, layout.width, layout.height);
+    subtitle(&mut svg, data, &rates, layout.width);
+    let attach = attachments(data, &layout, &routes);
+    rails(&mut svg, data, &layout, &routes, &attach, &rates);
+    for (i, node) in data.nodes.iter().enumerate() {
+        place(&mut svg, i, node, layout.boxes[i], &rates, &marks);
+    }
+    legend(&mut svg, data, &rates, &marks, layout.legend_top);
+    svg.push_str("</svg>\n");
+    svg
+}
+
+/// A number for the SVG: one decimal, and never NaN or infinite.
+fn n(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:.1}")
+    } else {
+        "0".into()
+    }
+}
+
+/// A rate or an hour count as a reader wants it: whole above 10, else a few decimals, no
+/// trailing zeros.
+fn amount(v: f64) -> String {
+    if !v.is_finite() || v <= 0.0 {
+        return "0".into();
+    }
+    let s = if v >= 10.0 {
+        format!("{v:.0}")
+    } else if v >= 1.0 {
+        format!("{v:.1}")
+    } else {
+        format!("{v:.2}")
+    };
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').into()
+    } else {
+        s
+    }
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// Estimated width of `text` at `font` px (a generous average glyph, so that text stays in its
+/// box with any sans-serif font).
+fn text_w(text: &str, font: f64, bold: bool) -> f64 {
+    text.chars().count() as f64 * font * if bold { 0.66 } else { 0.6 }
+}
+
+/// Trolleys per hour on every rail and through every place, and the width scale.
+struct Rates {
+    /// Hours are known (finite, above 0) and every rate came out finite.
+    known: bool,
+    edge: Vec<f64>,
+    node: Vec<f64>,
+    /// The rate drawn [`MAX_W`] wide: a round number at least the largest rate.
+    scale: f64,
+}
+
+impl Rates {
+    fn new(data: &MapData) -> Self {
+        let n = data.nodes.len();
+        let hours = data.hours;
+        let valid = |e: &&MapEdge| e.from < n && e.to < n && e.from != e.to;
+        let edge: Vec<f64> = data
+            .edges
+            .iter()
+            .map(|e| e.trolleys as f64 / hours)
+            .collect();
+        let mut into = vec![0.0; n];
+        let mut out = vec![0.0; n];
+        let mut has_in = vec![false; n];
+        for (e, r) in data.edges.iter().zip(&edge) {
+            if valid(&e) {
+                out[e.from] += r;
+                into[e.to] += r;
+                has_in[e.to] = true;
+            }
+        }
+        // A place fed from nowhere (a loading station) shows what it sent.
+        let node: Vec<f64> = (0..n)
+            .map(|i| if has_in[i] { into[i] } else { out[i] })
+            .collect();
+        let known =
+            hours.is_finite() && hours > 0.0 && edge.iter().chain(&node).all(|r| r.is_finite());
+        if !known {
+            return Self {
+                known,
+                edge: vec![0.0; edge.len()],
+                node: vec![0.0; n],
+                scale: 1.0,
+            };
+        }
+        // The return rail's trunks carry sums, so the scale covers the places' totals too.
+        let largest = edge.iter().chain(&node).copied().fold(0.0, f64::max);
+        Self {
+            known,
+            edge,
+            node,
+            scale: nice_ceiling(largest),
+        }
+    }
+
+    /// Rail width for `rate` trolleys per hour: linear, so more trolleys never draw thinner.
+    fn width(&self, rate: f64) -> f64 {
+        if !(self.known && rate > 0.0) {
+            return 1.0;
+        }
+        (MIN_W + (MAX_W - MIN_W) * rate / self.scale).min(MAX_W)
+    }
+
+    fn label(&self, rate: f64) -> String {
+        if self.known {
+            format!("{} /h", amount(rate))
+        } else {
+            "no time".into()
+        }
+    }
+
+    fn node_label(&self, i: usize) -> String {
+        self.label(self.node[i])
+    }
+}
+
+/// A round number at least `max` (1, 1.2, 1.5, 2, 2.5, 3, 4, 5, 6 or 8 times a power of ten),
+/// close enough that the busiest rail is drawn nearly full width; 1 for nothing.
+fn nice_ceiling(max: f64) -> f64 {
+    if !(max.is_finite() && max > 0.0) {
+        return 1.0;
+    }
+    let magnitude = 10f64.powf(max.log10().floor());
+    [1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0]
+        .iter()
+        .map(|m| m * magnitude)
+        .find(|v| *v >= max)
+        .unwrap_or(max)
+}
+
+/// The largest counts, which get the largest markers.
+struct MarkScale {
+    misdelivered: u64,
+    rejected: u64,
+}
+
+impl MarkScale {
+    fn new(data: &MapData) -> Self {
+        let nodes = &data.nodes;
+        Self {
+            misdelivered: nodes.iter().map(|n| n.misdelivered).max().unwrap_or(0),
+            rejected: nodes.iter().map(|n| n.rejected).max().unwrap_or(0),
+        }
+    }
+}
+
+/// Radius of a marker for `count` of at most `max`: its area grows with the count.
+fn mark_r(count: u64, max: u64) -> f64 {
+    let share = if max == 0 {
+        0.0
+    } else {
+        count as f64 / max as f64
+    };
+    4.0 + (MARK_R - 4.0) * share.sqrt()
+}
+
+/// The marks a place shows: (count, largest, colours) for misdeliveries and rejects.
+fn marks_of(
+    node: &MapNode,
+) -> impl Iterator<Item = (&'static str, u64, (&'static str, &'static str))> {
+    [
+        ("misdelivered", node.misdelivered, MISDELIVERED),
+        ("rejected", node.rejected, REJECTED),
+    ]
+    .into_iter()
+    .filter(|m| m.1 > 0)
+}
+
+/// Width a place's box needs: name over rate, then its marks with their numbers.
+fn content_width(node: &MapNode, rate: &str) -> f64 {
+    let text = text_w(&node.name, NAME_FONT, true).max(text_w(rate, SMALL_FONT, false));
+    let marks: f64 = marks_of(node)
+        .map(|(_, count, _)| {
+            2.0 * MARK_R + 4.0 + text_w(&count.to_string(), COUNT_FONT, true) + 8.0
+        })
+        .sum();
+    PAD + text + 12.0 + marks + PAD
+}
+
+/// How a rail is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Route {
+    /// Rightwards, from column to column.
+    Forward,
+    /// Back or within a column: a loop under the columns.
+    Back,
+    /// Into the return rail, by the trunk right of its place's column.
+    IntoReturn,
+    /// Out of the return rail, by the trunk left of its place's column.
+    FromReturn,
+    /// Not drawn: an end is missing, a loop on one place, or return to return.
+    Skip,
+}
+
+impl Route {
+    fn of(data: &MapData, e: &MapEdge) -> Self {
+        let (Some(from), Some(to)) = (data.nodes.get(e.from), data.nodes.get(e.to)) else {
+            return Self::Skip;
+        };
+        let ret = |n: &MapNode| n.kind == NodeKind::Return;
+        match (ret(from), ret(to)) {
+            _ if e.from == e.to => Self::Skip,
+            (true, true) => Self::Skip,
+            (false, true) => Self::IntoReturn,
+            (true, false) => Self::FromReturn,
+            (false, false) if to.layer > from.layer => Self::Forward,
+            (false, false) => Self::Back,
+        }
+    }
+}
+
+/// Where each rail leaves and enters its places: `(start y, end y)`, spread over the box's
+/// side in the order of the other ends, so that rails fan out instead of piling up.
+fn attachments(data: &MapData, layout: &Layout, routes: &[Route]) -> Vec<(f64, f64)> {
+    let boxes = &layout.boxes;
+    let mut ends: Vec<(f64, f64)> = data
+        .edges
+        .iter()
+        .map(|e| {
+            let mid = |i: usize| boxes.get(i).map_or(0.0, |b| b.mid_y());
+            (mid(e.from), mid(e.to))
+        })
+        .collect();
+    for i in 0..data.nodes.len() {
+        for leaving in [true, false] {
+            let mut side: Vec<(f64, usize)> = data
+                .edges
+                .iter()
+                .enumerate()
+                .filter(|&(k, e)| {
+                    let r = routes[k];
+                    if leaving {
+                        e.from == i && matches!(r, Route::Forward | Route::IntoReturn)
+                    } else {
+                        e.to == i && matches!(r, Route::Forward | Route::FromReturn)
+                    }
+                })
+                .map(|(k, e)| (boxes[if leaving { e.to } else { e.from }].mid_y(), k))
+                .collect();
+            side.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let count = side.len() as f64;
+            let step = if side.len() > 1 {
+                ((BOX_H - 12.0) / (count - 1.0)).min(7.0)
+            } else {
+                0.0
+            };
+            for (rank, &(_, k)) in side.iter().enumerate() {
+                let y = boxes[i].mid_y() + (rank as f64 - (count - 1.0) / 2.0) * step;
+                if leaving {
+                    ends[k].0 = y;
+                } else {
+                    ends[k].1 = y;
+                }
+            }
+        }
+    }
+    ends
+}

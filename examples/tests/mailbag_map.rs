@@ -1,0 +1,438 @@
+//! The plant map picture (`mailbag::plant::map::draw`): well-formed SVG, every place named,
+//! rail widths that follow the trolleys, marks exactly where something went wrong, no NaN, no
+//! overlapping boxes, an empty map that says so.
+//!
+//! Set `MAP_SVG_OUT=path.svg` to write the example plant's map there and look at it
+//! (`rsvg-convert path.svg -w 1200 -o path.png`).
+
+use proptest::prelude::*;
+use regler_examples::mailbag::plant::map::draw;
+use regler_examples::mailbag::plant::map_data::{MapData, MapEdge, MapNode, NodeKind};
+
+/// A plausible 24-hour run of the plant: P1–P3 → R1 → letters / parcels / sorted readers →
+/// lane readers → D1–D4, E1–E11 → A1–A3, B1–B2, C1–C2; sorted → dock readers → 3 docks;
+/// rejects → manual; everything → return → P1–P3.
+fn example_plant() -> MapData {
+    let mut map = MapData {
+        hours: 24.0,
+        ..MapData::default()
+    };
+    let mut node = |name: &str, kind: NodeKind, layer: u8| {
+        map.nodes.push(MapNode {
+            name: name.into(),
+            kind,
+            layer,
+            misdelivered: 0,
+            rejected: 0,
+            alarm: false,
+        });
+        map.nodes.len() - 1
+    };
+    let p: Vec<usize> = ["P1", "P2", "P3"]
+        .iter()
+        .map(|n| node(n, NodeKind::Loading, 0))
+        .collect();
+    let r1 = node("R1", NodeKind::Reader, 1);
+    let (letters, parcels, sorted) = (
+        node("R2", NodeKind::Reader, 2),
+        node("R3", NodeKind::Reader, 2),
+        node("R4", NodeKind::Reader, 2),
+    );
+    let lane_readers: Vec<usize> = ["R5", "R6", "R7", "R8"]
+        .iter()
+        .map(|n| node(n, NodeKind::Reader, 3))
+        .collect();
+    let dock_reader = node("R9", NodeKind::Reader, 3);
+    let lanes: Vec<usize> = [
+        "D1", "D2", "D3", "D4", "E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8", "E9", "E10", "E11",
+    ]
+    .iter()
+    .map(|n| node(n, NodeKind::Buffer, 4))
+    .collect();
+    let stations: Vec<usize> = ["A1", "A2", "A3", "B1", "B2", "C1", "C2"]
+        .iter()
+        .map(|n| node(n, NodeKind::Emptying, 5))
+        .collect();
+    let docks: Vec<usize> = ["dock 1", "dock 2", "dock 3"]
+        .iter()
+        .map(|n| node(n, NodeKind::Dock, 5))
+        .collect();
+    let manual = node("manual", NodeKind::Manual, 5);
+    let ret = node("return", NodeKind::Return, 6);
+
+    let mut edge = |from: usize, to: usize, trolleys: u64| {
+        map.edges.push(MapEdge { from, to, trolleys });
+    };
+    for (&p, t) in p.iter().zip([980, 910, 560]) {
+        edge(p, r1, t);
+        edge(ret, p, t);
+    }
+    edge(r1, letters, 1_120);
+    edge(r1, parcels, 690);
+    edge(r1, sorted, 612);
+    // Letters: D1–D4 by R5, E1–E6 by R6; parcels: E7–E9 by R7, E10–E11 by R8.
+    edge(letters, lane_readers[0], 560);
+    edge(letters, lane_readers[1], 553);
+    edge(parcels, lane_readers[2], 410);
+    edge(parcels, lane_readers[3], 276);
+    edge(sorted, dock_reader, 606);
+    let lane_feed = [
+        (0, 0, 150),
+        (0, 1, 140),
+        (0, 2, 160),
+        (0, 3, 109),
+        (1, 4, 120),
+        (1, 5, 98),
+        (1, 6, 90),
+        (1, 7, 101),
+        (1, 8, 80),
+        (1, 9, 63),
+        (2, 10, 160),
+        (2, 11, 130),
+        (2, 12, 119),
+        (3, 13, 140),
+        (3, 14, 135),
+    ];
+    for (reader, lane, t) in lane_feed {
+        edge(lane_readers[reader], lanes[lane], t);
+    }
+    // Letter lanes empty to A1–A3 in portions, parcel lanes to B1–B2 and C1–C2.
+    for (k, &lane) in lanes.iter().enumerate().take(10) {
+        let t = lane_feed[k].2;
+        edge(lane, stations[k % 3], t * 2 / 3);
+        edge(lane, stations[(k + 1) % 3], t - t * 2 / 3);
+    }
+    for (k, &lane) in lanes.iter().enumerate().skip(10) {
+        edge(lane, stations[3 + (k % 4)], lane_feed[k].2);
+    }
+    for (&dock, t) in docks.iter().zip([250, 201, 155]) {
+        edge(dock_reader, dock, t);
+        edge(dock, ret, t);
+    }
+    for (&station, t) in stations.iter().zip([420, 405, 410, 146, 140, 160, 135]) {
+        edge(station, ret, t);
+    }
+    for (reader, t) in [
+        (r1, 12),
+        (letters, 7),
+        (parcels, 4),
+        (sorted, 6),
+        (lane_readers[1], 17),
+        (dock_reader, 2),
+    ] {
+        edge(reader, manual, t);
+        map.nodes[reader].rejected = t;
+    }
+    edge(manual, ret, 48);
+    map.nodes[lane_readers[1]].alarm = true;
+    for (place, count) in [
+        (docks[1], 3),
+        (stations[1], 1),
+        (lanes[6], 2),
+        (stations[4], 14),
+    ] {
+        map.nodes[place].misdelivered = count;
+    }
+    map
+}
+
+/// Checks that `svg` is well-formed XML with one `<svg>` root: tags nest and close, quotes
+/// pair, every `&` starts an entity, no text outside the root.
+fn assert_well_formed(svg: &str) {
+    let mut open: Vec<&str> = Vec::new();
+    let mut roots = 0;
+    let mut rest = svg;
+    while let Some(lt) = rest.find('<') {
+        let text = &rest[..lt];
+        assert_entities(text);
+        assert!(
+            !open.is_empty() || text.trim().is_empty(),
+            "text outside the root: {text:?}"
+        );
+        rest = &rest[lt..];
+        let gt = rest.find('>').expect("a tag that never closes");
+        let tag = &rest[1..gt];
+        rest = &rest[gt + 1..];
+        assert_eq!(tag.matches('"').count() % 2, 0, "unpaired quote in <{tag}>");
+        assert!(!tag.contains('<'), "'<' inside <{tag}>");
+        assert_entities(tag);
+        if let Some(name) = tag.strip_prefix('/') {
+            assert_eq!(
+                open.pop(),
+                Some(name.trim()),
+                "</{name}> closes the wrong tag"
+            );
+            continue;
+        }
+        let name = tag
+            .split(|c: char| c.is_whitespace() || c == '/')
+            .next()
+            .unwrap();
+        assert!(
+            !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric()),
+            "bad tag name in <{tag}>"
+        );
+        if open.is_empty() {
+            roots += 1;
+            assert_eq!(name, "svg", "the root is <{name}>");
+        }
+        if !tag.ends_with('/') {
+            open.push(name);
+        }
+    }
+    assert!(rest.trim().is_empty(), "text after the root: {rest:?}");
+    assert!(open.is_empty(), "never closed: {open:?}");
+    assert_eq!(roots, 1);
+}
+
+fn assert_entities(text: &str) {
+    for (i, _) in text.match_indices('&') {
+        let after = &text[i..];
+        assert!(
+            ["&amp;", "&lt;", "&gt;", "&quot;", "&apos;"]
+                .iter()
+                .any(|e| after.starts_with(e)),
+            "a bare & in {text:?}"
+        );
+    }
+}
+
+/// The tag carrying `id="<id>"`, if there is one.
+fn element<'a>(svg: &'a str, id: &str) -> Option<&'a str> {
+    let at = svg.find(&format!(r#" id="{id}""#))?;
+    let start = svg[..at].rfind('<')?;
+    let end = at + svg[at..].find('>')?;
+    Some(&svg[start..=end])
+}
+
+fn attr(tag: &str, name: &str) -> f64 {
+    let key = format!(r#" {name}=""#);
+    let at = tag
+        .find(&key)
+        .unwrap_or_else(|| panic!("no {name} in {tag}"))
+        + key.len();
+    let value = &tag[at..at + tag[at..].find('"').unwrap()];
+    value
+        .parse()
+        .unwrap_or_else(|_| panic!("{name}={value:?} in {tag}"))
+}
+
+/// The drawn width of rail `k`, if it is drawn.
+fn rail_width(svg: &str, k: usize) -> Option<f64> {
+    element(svg, &format!("rail-{k}")).map(|tag| attr(tag, "stroke-width"))
+}
+
+#[test]
+fn example_plant_map_is_well_formed_and_names_every_place() {
+    let map = example_plant();
+    let svg = draw(&map, "voting, 24 h, seed 1977");
+    if let Ok(path) = std::env::var("MAP_SVG_OUT") {
+        std::fs::write(path, &svg).unwrap();
+    }
+    assert_well_formed(&svg);
+    assert!(svg.contains(">voting, 24 h, seed 1977<"));
+    for node in &map.nodes {
+        assert!(
+            svg.contains(&format!(">{}<", node.name)),
+            "{} unnamed",
+            node.name
+        );
+    }
+    for (k, _) in map.edges.iter().enumerate() {
+        assert!(rail_width(&svg, k).is_some(), "rail {k} not drawn");
+    }
+    // The legend gives the scale and names every kind of place on the map.
+    for words in [
+        "trolleys per hour",
+        "loading station",
+        "buffer lane",
+        "dock chain",
+        "return rail",
+    ] {
+        assert!(svg.contains(words), "{words}");
+    }
+}
+
+#[test]
+fn the_busier_rail_of_the_example_is_wider() {
+    let map = example_plant();
+    let svg = draw(&map, "t");
+    // R1 → R2 (1 120 trolleys) against R2 → R5 (560): exactly twice.
+    let find = |from: &str, to: &str| {
+        map.edges
+            .iter()
+            .position(|e| map.nodes[e.from].name == from && map.nodes[e.to].name == to)
+            .unwrap()
+    };
+    let wide = rail_width(&svg, find("R1", "R2")).unwrap();
+    let narrow = rail_width(&svg, find("R2", "R5")).unwrap();
+    assert!(wide > narrow, "{wide} vs {narrow}");
+}
+
+#[test]
+fn an_empty_map_is_a_valid_picture_that_says_so() {
+    let svg = draw(&MapData::default(), "nothing & nobody");
+    assert_well_formed(&svg);
+    assert!(svg.contains("empty"), "{svg}");
+    assert!(svg.contains("nothing &amp; nobody"));
+    // Places without rails or time are drawn, with no rates.
+    let mut lone = example_plant();
+    lone.edges.clear();
+    lone.hours = 0.0;
+    let svg = draw(&lone, "t");
+    assert_well_formed(&svg);
+    assert!(svg.contains("no time"));
+}
+
+#[test]
+fn without_time_no_rate_is_printed() {
+    for hours in [
+        0.0,
+        -3.0,
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        1e-320,
+    ] {
+        let mut map = example_plant();
+        map.hours = hours;
+        let svg = draw(&map, "t");
+        assert_well_formed(&svg);
+        assert!(!svg.contains("NaN") && !svg.contains("inf"), "{hours}");
+        assert!(svg.contains("no time"), "{hours}");
+        assert!(!svg.contains(" /h"), "{hours}: a rate shown");
+    }
+}
+
+/// Any small plant: up to 8 layers of up to 16 places each (one return rail now and then),
+/// random rails (some to missing places), counts from 0 to huge, any hours.
+fn any_map() -> impl Strategy<Value = MapData> {
+    let kind = prop_oneof![
+        Just(NodeKind::Loading),
+        Just(NodeKind::Reader),
+        Just(NodeKind::Buffer),
+        Just(NodeKind::Emptying),
+        Just(NodeKind::Dock),
+        Just(NodeKind::Manual),
+        Just(NodeKind::Return),
+    ];
+    let count = prop_oneof![Just(0u64), 0u64..50, Just(u64::MAX)];
+    let node = (
+        "[A-Z][a-z0-9 <&]{0,7}",
+        kind,
+        0u8..8,
+        count.clone(),
+        count.clone(),
+        any::<bool>(),
+    )
+        .prop_map(
+            |(name, kind, layer, misdelivered, rejected, alarm)| MapNode {
+                name,
+                kind,
+                layer,
+                misdelivered,
+                rejected,
+                alarm,
+            },
+        );
+    let hours = prop_oneof![
+        Just(0.0),
+        Just(f64::NAN),
+        Just(1e-300),
+        0.01f64..200.0,
+        Just(24.0)
+    ];
+    (
+        hours,
+        prop::collection::vec(node, 0..40),
+        prop::collection::vec((0usize..42, 0usize..42, count), 0..60),
+    )
+        .prop_map(|(hours, nodes, edges)| MapData {
+            hours,
+            nodes,
+            edges: edges
+                .into_iter()
+                .map(|(from, to, trolleys)| MapEdge { from, to, trolleys })
+                .collect(),
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn any_map_is_well_formed_without_nan(map in any_map()) {
+        let svg = draw(&map, "any");
+        assert_well_formed(&svg);
+        prop_assert!(!svg.contains("NaN") && !svg.contains("inf"));
+        for node in &map.nodes {
+            let name = node.name.replace('&', "&amp;").replace('<', "&lt;");
+            prop_assert!(svg.contains(&name), "{} unnamed", node.name);
+        }
+    }
+
+    #[test]
+    fn more_trolleys_never_draw_a_thinner_rail(map in any_map()) {
+        let svg = draw(&map, "widths");
+        let drawn: Vec<(u64, f64)> = map
+            .edges
+            .iter()
+            .enumerate()
+            .filter_map(|(k, e)| rail_width(&svg, k).map(|w| (e.trolleys, w)))
+            .collect();
+        for &(t1, w1) in &drawn {
+            for &(t2, w2) in &drawn {
+                if t1 >= t2.saturating_mul(2) {
+                    prop_assert!(w1 >= w2, "{t1} trolleys {w1} px, {t2} trolleys {w2} px");
+                }
+                if t1 > t2 {
+                    prop_assert!(w1 >= w2);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn marks_are_exactly_where_something_went_wrong(map in any_map()) {
+        let svg = draw(&map, "marks");
+        for (i, node) in map.nodes.iter().enumerate() {
+            for (what, wrong) in [
+                ("misdelivered", node.misdelivered > 0),
+                ("rejected", node.rejected > 0),
+                ("alarm", node.alarm),
+            ] {
+                prop_assert_eq!(element(&svg, &format!("{what}-{i}")).is_some(), wrong, "{} {}", what, i);
+            }
+            if node.misdelivered > 0 {
+                let number = format!(">{}<", node.misdelivered);
+                prop_assert!(svg.contains(&number), "no {} written", node.misdelivered);
+            }
+        }
+        let marks = svg.matches(r#" id="misdelivered-"#).count()
+            + svg.matches(r#" id="rejected-"#).count();
+        let wrong = map.nodes.iter().map(|n| usize::from(n.misdelivered > 0) + usize::from(n.rejected > 0)).sum::<usize>();
+        prop_assert_eq!(marks, wrong);
+    }
+
+    #[test]
+    fn boxes_never_overlap_and_stay_in_the_picture(map in any_map()) {
+        let svg = draw(&map, "boxes");
+        let (w, h) = {
+            let root = &svg[..svg.find('>').unwrap()];
+            (attr(root, "width"), attr(root, "height"))
+        };
+        let boxes: Vec<(f64, f64, f64, f64)> = (0..map.nodes.len())
+            .map(|i| {
+                let tag = element(&svg, &format!("node-{i}")).unwrap();
+                (attr(tag, "x"), attr(tag, "y"), attr(tag, "width"), attr(tag, "height"))
+            })
+            .collect();
+        for (i, a) in boxes.iter().enumerate() {
+            prop_assert!(a.0 >= 0.0 && a.1 >= 0.0 && a.0 + a.2 <= w && a.1 + a.3 <= h, "{:?} outside {} x {}", a, w, h);
+            for b in &boxes[..i] {
+                let apart = a.0 + a.2 <= b.0 || b.0 + b.2 <= a.0 || a.1 + a.3 <= b.1 || b.1 + b.3 <= a.1;
+                prop_assert!(apart, "{:?} overlaps {:?}", a, b);
+            }
+        }
+    }
+}
