@@ -3,138 +3,16 @@
 //! overlapping boxes, an empty map that says so.
 //!
 //! Set `MAP_SVG_OUT=path.svg` to write the example plant's map there and look at it
-//! (`rsvg-convert path.svg -w 1200 -o path.png`).
+//! (`rsvg-convert path.svg -w 1200 -o path.png`); `MAP_SVG_OUT_CROWDED` and
+//! `MAP_SVG_OUT_BARE` write the crowded map and the one without rails or time.
 
 use proptest::prelude::*;
 use regler_examples::mailbag::plant::map::draw;
 use regler_examples::mailbag::plant::map_data::{MapData, MapEdge, MapNode, NodeKind};
 
-/// A plausible 24-hour run of the plant: P1–P3 → R1 → letters / parcels / sorted readers →
-/// lane readers → D1–D4, E1–E11 → A1–A3, B1–B2, C1–C2; sorted → dock readers → 3 docks;
-/// rejects → manual; everything → return → P1–P3.
-fn example_plant() -> MapData {
-    let mut map = MapData {
-        hours: 24.0,
-        ..MapData::default()
-    };
-    let mut node = |name: &str, kind: NodeKind, layer: u8| {
-        map.nodes.push(MapNode {
-            name: name.into(),
-            kind,
-            layer,
-            misdelivered: 0,
-            rejected: 0,
-            alarm: false,
-        });
-        map.nodes.len() - 1
-    };
-    let p: Vec<usize> = ["P1", "P2", "P3"]
-        .iter()
-        .map(|n| node(n, NodeKind::Loading, 0))
-        .collect();
-    let r1 = node("R1", NodeKind::Reader, 1);
-    let (letters, parcels, sorted) = (
-        node("R2", NodeKind::Reader, 2),
-        node("R3", NodeKind::Reader, 2),
-        node("R4", NodeKind::Reader, 2),
-    );
-    let lane_readers: Vec<usize> = ["R5", "R6", "R7", "R8"]
-        .iter()
-        .map(|n| node(n, NodeKind::Reader, 3))
-        .collect();
-    let dock_reader = node("R9", NodeKind::Reader, 3);
-    let lanes: Vec<usize> = [
-        "D1", "D2", "D3", "D4", "E1", "E2", "E3", "E4", "E5", "E6", "E7", "E8", "E9", "E10", "E11",
-    ]
-    .iter()
-    .map(|n| node(n, NodeKind::Buffer, 4))
-    .collect();
-    let stations: Vec<usize> = ["A1", "A2", "A3", "B1", "B2", "C1", "C2"]
-        .iter()
-        .map(|n| node(n, NodeKind::Emptying, 5))
-        .collect();
-    let docks: Vec<usize> = ["dock 1", "dock 2", "dock 3"]
-        .iter()
-        .map(|n| node(n, NodeKind::Dock, 5))
-        .collect();
-    let manual = node("manual", NodeKind::Manual, 5);
-    let ret = node("return", NodeKind::Return, 6);
-
-    let mut edge = |from: usize, to: usize, trolleys: u64| {
-        map.edges.push(MapEdge { from, to, trolleys });
-    };
-    for (&p, t) in p.iter().zip([980, 910, 560]) {
-        edge(p, r1, t);
-        edge(ret, p, t);
-    }
-    edge(r1, letters, 1_120);
-    edge(r1, parcels, 690);
-    edge(r1, sorted, 612);
-    // Letters: D1–D4 by R5, E1–E6 by R6; parcels: E7–E9 by R7, E10–E11 by R8.
-    edge(letters, lane_readers[0], 560);
-    edge(letters, lane_readers[1], 553);
-    edge(parcels, lane_readers[2], 410);
-    edge(parcels, lane_readers[3], 276);
-    edge(sorted, dock_reader, 606);
-    let lane_feed = [
-        (0, 0, 150),
-        (0, 1, 140),
-        (0, 2, 160),
-        (0, 3, 109),
-        (1, 4, 120),
-        (1, 5, 98),
-        (1, 6, 90),
-        (1, 7, 101),
-        (1, 8, 80),
-        (1, 9, 63),
-        (2, 10, 160),
-        (2, 11, 130),
-        (2, 12, 119),
-        (3, 13, 140),
-        (3, 14, 135),
-    ];
-    for (reader, lane, t) in lane_feed {
-        edge(lane_readers[reader], lanes[lane], t);
-    }
-    // Letter lanes empty to A1–A3 in portions, parcel lanes to B1–B2 and C1–C2.
-    for (k, &lane) in lanes.iter().enumerate().take(10) {
-        let t = lane_feed[k].2;
-        edge(lane, stations[k % 3], t * 2 / 3);
-        edge(lane, stations[(k + 1) % 3], t - t * 2 / 3);
-    }
-    for (k, &lane) in lanes.iter().enumerate().skip(10) {
-        edge(lane, stations[3 + (k % 4)], lane_feed[k].2);
-    }
-    for (&dock, t) in docks.iter().zip([250, 201, 155]) {
-        edge(dock_reader, dock, t);
-        edge(dock, ret, t);
-    }
-    for (&station, t) in stations.iter().zip([420, 405, 410, 146, 140, 160, 135]) {
-        edge(station, ret, t);
-    }
-    for (reader, t) in [
-        (r1, 12),
-        (letters, 7),
-        (parcels, 4),
-        (sorted, 6),
-        (lane_readers[1], 17),
-        (dock_reader, 2),
-    ] {
-        edge(reader, manual, t);
-        map.nodes[reader].rejected = t;
-    }
-    edge(manual, ret, 48);
-    map.nodes[lane_readers[1]].alarm = true;
-    for (place, count) in [
-        (docks[1], 3),
-        (stations[1], 1),
-        (lanes[6], 2),
-        (stations[4], 14),
-    ] {
-        map.nodes[place].misdelivered = count;
-    }
-    map
-}
+#[path = "mailbag_map/plants.rs"]
+mod plants;
+use plants::{crowded_plant, example_plant};
 
 /// Checks that `svg` is well-formed XML with one `<svg>` root: tags nest and close, quotes
 /// pair, every `&` starts an entity, no text outside the root.
@@ -279,7 +157,10 @@ fn an_empty_map_is_a_valid_picture_that_says_so() {
     let mut lone = example_plant();
     lone.edges.clear();
     lone.hours = 0.0;
-    let svg = draw(&lone, "t");
+    let svg = draw(&lone, "no time, no rails");
+    if let Ok(path) = std::env::var("MAP_SVG_OUT_BARE") {
+        std::fs::write(path, &svg).unwrap();
+    }
     assert_well_formed(&svg);
     assert!(svg.contains("no time"));
 }
@@ -393,6 +274,16 @@ proptest! {
     }
 
     #[test]
+    fn a_rail_is_dashed_exactly_when_no_trolley_used_it(map in any_map()) {
+        let svg = draw(&map, "dashes");
+        for (k, e) in map.edges.iter().enumerate() {
+            if let Some(tag) = element(&svg, &format!("rail-{k}")) {
+                prop_assert_eq!(tag.contains("stroke-dasharray"), e.trolleys == 0, "{}", tag);
+            }
+        }
+    }
+
+    #[test]
     fn marks_are_exactly_where_something_went_wrong(map in any_map()) {
         let svg = draw(&map, "marks");
         for (i, node) in map.nodes.iter().enumerate() {
@@ -404,7 +295,7 @@ proptest! {
                 prop_assert_eq!(element(&svg, &format!("{what}-{i}")).is_some(), wrong, "{} {}", what, i);
             }
             if node.misdelivered > 0 {
-                let number = format!(">{}<", node.misdelivered);
+                let number = format!("<title>{} sacks misdelivered here", node.misdelivered);
                 prop_assert!(svg.contains(&number), "no {} written", node.misdelivered);
             }
         }
@@ -434,5 +325,23 @@ proptest! {
                 prop_assert!(apart, "{:?} overlaps {:?}", a, b);
             }
         }
+    }
+}
+
+#[test]
+fn a_crowded_map_keeps_its_boxes_apart() {
+    let map = crowded_plant();
+    let svg = draw(&map, "crowded: 8 layers, up to 20 places each, huge counts");
+    if let Ok(path) = std::env::var("MAP_SVG_OUT_CROWDED") {
+        std::fs::write(path, &svg).unwrap();
+    }
+    assert_well_formed(&svg);
+    assert!(!svg.contains("NaN") && !svg.contains("inf"));
+    for node in &map.nodes {
+        assert!(
+            svg.contains(&format!(">{}<", node.name)),
+            "{} unnamed",
+            node.name
+        );
     }
 }

@@ -106,6 +106,29 @@ fn amount(v: f64) -> String {
     }
 }
 
+/// A count as a mark's number: whole below 100 000, else three digits and a unit
+/// (`123k`, `4.56M`, `18.4E`), so that a huge count does not widen its column.
+fn count_text(count: u64) -> String {
+    if count < 100_000 {
+        return count.to_string();
+    }
+    let units = ["k", "M", "G", "T", "P", "E"];
+    let mut value = count as f64 / 1000.0;
+    let mut unit = 0;
+    while value >= 999.5 && unit + 1 < units.len() {
+        value /= 1000.0;
+        unit += 1;
+    }
+    let digits = if value >= 99.95 {
+        0
+    } else if value >= 9.995 {
+        1
+    } else {
+        2
+    };
+    format!("{value:.digits$}{}", units[unit])
+}
+
 fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -200,10 +223,18 @@ fn nice_ceiling(max: f64) -> f64 {
     if !(max.is_finite() && max > 0.0) {
         return 1.0;
     }
-    let magnitude = 10f64.powf(max.log10().floor());
+    let exponent = max.log10().floor();
+    // Dividing by a power of ten keeps 0.3 at 0.3 (0.1 × 3 would be 0.30000000000000004).
+    let at = |m: f64| {
+        if exponent >= 0.0 {
+            m * 10f64.powf(exponent)
+        } else {
+            m / 10f64.powf(-exponent)
+        }
+    };
     [1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0]
-        .iter()
-        .map(|m| m * magnitude)
+        .into_iter()
+        .map(at)
         .find(|v| *v >= max)
         .unwrap_or(max)
 }
@@ -251,7 +282,7 @@ fn content_width(node: &MapNode, rate: &str) -> f64 {
     let text = text_w(&node.name, NAME_FONT, true).max(text_w(rate, SMALL_FONT, false));
     let marks: f64 = marks_of(node)
         .map(|(_, count, _)| {
-            2.0 * MARK_R + 4.0 + text_w(&count.to_string(), COUNT_FONT, true) + 8.0
+            2.0 * MARK_R + 4.0 + text_w(&count_text(count), COUNT_FONT, true) + 8.0
         })
         .sum();
     PAD + text + 12.0 + marks + PAD
@@ -310,12 +341,20 @@ fn attachments(data: &MapData, layout: &Layout, routes: &[Route]) -> Vec<(f64, f
                 .filter(|&(k, e)| {
                     let r = routes[k];
                     if leaving {
-                        e.from == i && matches!(r, Route::Forward | Route::IntoReturn)
+                        e.from == i && matches!(r, Route::Forward | Route::IntoReturn | Route::Back)
                     } else {
-                        e.to == i && matches!(r, Route::Forward | Route::FromReturn)
+                        e.to == i && matches!(r, Route::Forward | Route::FromReturn | Route::Back)
                     }
                 })
-                .map(|(k, e)| (boxes[if leaving { e.to } else { e.from }].mid_y(), k))
+                .map(|(k, e)| {
+                    // Rails that loop back under the columns leave and enter lowest.
+                    let other = if routes[k] == Route::Back {
+                        f64::MAX
+                    } else {
+                        boxes[if leaving { e.to } else { e.from }].mid_y()
+                    };
+                    (other, k)
+                })
                 .collect();
             side.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             let count = side.len() as f64;
@@ -335,4 +374,58 @@ fn attachments(data: &MapData, layout: &Layout, routes: &[Route]) -> Vec<(f64, f
         }
     }
     ends
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_stay_short() {
+        for (count, text) in [
+            (0, "0"),
+            (99_999, "99999"),
+            (100_000, "100k"),
+            (123_456, "123k"),
+            (999_499, "999k"),
+            (999_500, "1.00M"),
+            (4_560_000, "4.56M"),
+            (u64::MAX, "18.4E"),
+        ] {
+            assert_eq!(count_text(count), text, "{count}");
+        }
+        for count in (0..64).map(|b| 1u64 << b).chain([u64::MAX, 999_999_999]) {
+            assert!(
+                count_text(count).len() <= 6,
+                "{count}: {}",
+                count_text(count)
+            );
+        }
+    }
+
+    #[test]
+    fn rates_read_as_people_write_them() {
+        assert_eq!(amount(103.4), "103");
+        assert_eq!(amount(5.0), "5");
+        assert_eq!(amount(6.25), "6.2");
+        assert_eq!(amount(0.25), "0.25");
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(amount(bad), "0");
+        }
+        assert_eq!(n(f64::NAN), "0");
+        assert_eq!(n(f64::NEG_INFINITY), "0");
+    }
+
+    #[test]
+    fn the_scale_is_round_and_close_above_the_busiest_rail() {
+        assert_eq!(nice_ceiling(103.0), 120.0);
+        assert_eq!(nice_ceiling(100.0), 100.0);
+        assert_eq!(nice_ceiling(0.3), 0.3);
+        assert_eq!(nice_ceiling(0.0), 1.0);
+        assert_eq!(nice_ceiling(f64::NAN), 1.0);
+        for max in [0.07, 1.0, 9.9, 41.0, 1e6, 3.3e17] {
+            let scale = nice_ceiling(max);
+            assert!(scale >= max && scale <= max * 1.25, "{max} → {scale}");
+        }
+    }
 }

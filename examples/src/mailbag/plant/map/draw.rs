@@ -7,7 +7,7 @@ use super::super::map_data::{MapData, MapNode, NodeKind};
 use super::layout::{BAR_H, BOX_H, Layout, MIN_WIDTH, ROW_GAP, Rect};
 use super::{
     ALARM, COUNT_FONT, LEGEND_FONT, MARK_R, MarkScale, NAME_FONT, PAD, RAIL, Rates, Route,
-    SMALL_FONT, TITLE_FONT, amount, escape, mark_r, marks_of, n, text_w,
+    SMALL_FONT, TITLE_FONT, amount, count_text, escape, mark_r, marks_of, n, text_w,
 };
 
 /// The pale fill of each kind of place, and what the legend calls it.
@@ -100,9 +100,7 @@ pub(super) fn rails(
 ) {
     let boxes = &layout.boxes;
     let name = |i: usize| escape(&data.nodes[i].name);
-    // Trunks of the return rail: per (column, return node, into the bar?), the branches'
-    // (attach y, rate).
-    let mut trunks: Vec<((usize, usize, bool), Vec<(f64, f64)>)> = Vec::new();
+    let mut trunks: Vec<Trunk> = Vec::new();
     for (k, e) in data.edges.iter().enumerate() {
         let rate = rates.edge[k];
         let (y0, y1) = attach[k];
@@ -110,18 +108,19 @@ pub(super) fn rails(
             Route::Skip => continue,
             Route::Forward => forward_path(layout, e.from, y0, e.to, y1),
             Route::Back => {
+                // Out to the right, down under the columns, back left, up into the target's
+                // left side: through the gutters, never across a box.
                 let (a, b) = (boxes[e.from], boxes[e.to]);
-                let low = layout.graph_bottom + 45.0;
+                let low = layout.graph_bottom + 35.0;
                 format!(
-                    "M{} {} C{} {} {} {} {} {}",
-                    n(a.mid_x()),
-                    n(a.bottom()),
-                    n(a.mid_x()),
+                    "M{} {} H{} V{} H{} V{} H{}",
+                    n(a.right()),
+                    n(y0),
+                    n(a.right() + 12.0),
                     n(low),
-                    n(b.mid_x()),
-                    n(low),
-                    n(b.mid_x()),
-                    n(b.bottom())
+                    n(b.x - 12.0),
+                    n(y1),
+                    n(b.x)
                 )
             }
             Route::IntoReturn | Route::FromReturn => {
@@ -132,9 +131,13 @@ pub(super) fn rails(
                 };
                 let y = if into { y0 } else { y1 };
                 let key = (column, bar, into);
-                match trunks.iter_mut().find(|t| t.0 == key) {
-                    Some(t) => t.1.push((y, rate)),
-                    None => trunks.push((key, vec![(y, rate)])),
+                let branch = (y, rate, e.trolleys);
+                match trunks.iter_mut().find(|t| t.key == key) {
+                    Some(t) => t.branches.push(branch),
+                    None => trunks.push(Trunk {
+                        key,
+                        branches: vec![branch],
+                    }),
                 }
                 let x = trunk_x(layout, column, into);
                 let b = boxes[place];
@@ -145,32 +148,45 @@ pub(super) fn rails(
         let _ = writeln!(
             svg,
             r#"<path id="rail-{k}" d="{d}" {}><title>{} → {}: {} ({} trolleys)</title></path>"#,
-            stroke(rates, rate),
+            stroke(rates, rate, e.trolleys > 0),
             name(e.from),
             name(e.to),
             rates.label(rate),
             e.trolleys
         );
     }
-    for ((column, bar, into), mut branches) in trunks {
+    for Trunk {
+        key: (column, bar, into),
+        mut branches,
+    } in trunks
+    {
         branches.sort_by(|a, b| a.0.total_cmp(&b.0));
         let x = trunk_x(layout, column, into);
         let bar_y = boxes[bar].y;
-        let mut carried = 0.0;
-        for (i, &(y, rate)) in branches.iter().enumerate() {
+        let (mut carried, mut used) = (0.0, false);
+        for (i, &(y, rate, trolleys)) in branches.iter().enumerate() {
             carried += rate;
+            used |= trolleys > 0;
             let next = branches.get(i + 1).map_or(bar_y, |b| b.0);
             let _ = writeln!(
                 svg,
                 r#"<path class="trunk" d="M{x} {} V{}" {} stroke-linecap="square"><title>return rail: {}</title></path>"#,
                 n(y),
                 n(next),
-                stroke(rates, carried),
+                stroke(rates, carried, used),
                 rates.label(carried),
                 x = n(x),
             );
         }
     }
+}
+
+/// A vertical of the return rail beside a column, joining its places' branches to the bar.
+struct Trunk {
+    /// (column, return node, into the bar rather than out of it).
+    key: (usize, usize, bool),
+    /// (attach y, trolleys per hour, trolleys) of each branch.
+    branches: Vec<(f64, f64, u64)>,
 }
 
 /// Where the return rail's trunk of `column` runs: right of it (into the bar) or left of it.
@@ -179,9 +195,9 @@ fn trunk_x(layout: &Layout, column: usize, into: bool) -> f64 {
     if into { c.right() + 24.0 } else { c.x - 24.0 }
 }
 
-/// The stroke of a rail carrying `rate`: width by rate, dashed when no trolley used it.
-fn stroke(rates: &Rates, rate: f64) -> String {
-    let dash = if rates.known && rate > 0.0 {
+/// The stroke of a rail carrying `rate`: width by rate, dashed when no trolley `used` it.
+fn stroke(rates: &Rates, rate: f64, used: bool) -> String {
+    let dash = if used {
         ""
     } else {
         r#" stroke-dasharray="5 4""#
@@ -291,7 +307,7 @@ pub(super) fn place(
     let mut right = b.right() - PAD;
     let cy = b.mid_y();
     for (what, count, (colour, ink)) in marks_of(node) {
-        let number = count.to_string();
+        let number = count_text(count);
         let _ = writeln!(
             svg,
             r#"<text x="{}" y="{}" text-anchor="end" font-size="{COUNT_FONT}" font-weight="bold" fill="{ink}">{number}</text>"#,
@@ -386,7 +402,7 @@ pub(super) fn legend(svg: &mut String, data: &MapData, rates: &Rates, marks: &Ma
                 r#"<path d="M{} {} h36" {}/>"#,
                 n(x),
                 n(y),
-                stroke(rates, rate)
+                stroke(rates, rate, true)
             );
             x = text(svg, x + 42.0, y, &rates.label(rate), false);
         }
@@ -404,7 +420,7 @@ pub(super) fn legend(svg: &mut String, data: &MapData, rates: &Rates, marks: &Ma
         r#"<path d="M{} {} h36" {}/>"#,
         n(x),
         n(y),
-        stroke(rates, 0.0)
+        stroke(rates, 0.0, false)
     );
     text(svg, x + 42.0, y, "no trolleys", false);
 

@@ -8,8 +8,11 @@ use super::super::map_data::{MapData, NodeKind};
 pub(super) const BOX_H: f64 = 40.0;
 /// Free space between two boxes of a column.
 pub(super) const ROW_GAP: f64 = 14.0;
-/// Free space between two columns, where the rails run.
-const GUTTER: f64 = 130.0;
+/// Free space between two columns, where the rails run: as much as fits a picture about
+/// 1 500 px wide, within these bounds.
+const GUTTER: (f64, f64) = (80.0, 130.0);
+/// The width the gutters are chosen for: close to the 1 200 px a PNG of the map is made at.
+const TARGET_WIDTH: f64 = 1500.0;
 /// Margin left and right of the outer columns (the return rail's branches run there).
 const MARGIN: f64 = 75.0;
 /// Where the columns start: under the title and the subtitle.
@@ -116,9 +119,14 @@ impl Layout {
         let tallest = columns.iter().map(|c| c.nodes.len()).max().unwrap_or(0);
         let column_h = |k: usize| k as f64 * (BOX_H + ROW_GAP) - ROW_GAP;
         let graph_h = column_h(tallest).max(0.0);
-        let content_w: f64 = MARGIN * 2.0
-            + columns.iter().map(|c| c.w).sum::<f64>()
-            + GUTTER * columns.len().saturating_sub(1) as f64;
+        let boxes_w: f64 = columns.iter().map(|c| c.w).sum();
+        let gaps = columns.len().saturating_sub(1) as f64;
+        let gutter = if gaps > 0.0 {
+            ((TARGET_WIDTH - 2.0 * MARGIN - boxes_w) / gaps).clamp(GUTTER.0, GUTTER.1)
+        } else {
+            GUTTER.1
+        };
+        let content_w = MARGIN * 2.0 + boxes_w + gutter * gaps;
         let width = content_w.max(MIN_WIDTH).ceil();
         let mut x = (width - content_w) / 2.0 + MARGIN;
         let mut boxes = vec![
@@ -141,7 +149,7 @@ impl Layout {
                     h: BOX_H,
                 };
             }
-            x += column.w + GUTTER;
+            x += column.w + gutter;
         }
         let graph_bottom = GRAPH_TOP + graph_h;
         // The return rail's bar spans the columns and the margins where its branches run.
@@ -178,7 +186,7 @@ impl Layout {
 fn order_by_upstream(data: &MapData, column_of: &[Option<usize>], columns: &mut [Column]) {
     let n = data.nodes.len();
     let mut position = vec![0.5; n];
-    for c in 0..columns.len() {
+    for (c, column) in columns.iter_mut().enumerate() {
         // Per node: (sum, count) of its upstream places' positions.
         let mut upstream = vec![(0.0, 0.0); n];
         for e in &data.edges {
@@ -187,7 +195,7 @@ fn order_by_upstream(data: &MapData, column_of: &[Option<usize>], columns: &mut 
                 upstream[e.to].1 += 1.0;
             }
         }
-        let nodes = &columns[c].nodes;
+        let nodes = &column.nodes;
         let kind_key = |kind: NodeKind| {
             let (sum, count) = nodes
                 .iter()
@@ -197,7 +205,7 @@ fn order_by_upstream(data: &MapData, column_of: &[Option<usize>], columns: &mut 
                 });
             if count > 0.0 { sum / count } else { 2.0 }
         };
-        let mut keyed: Vec<(f64, u8, usize)> = columns[c]
+        let mut keyed: Vec<(f64, u8, usize)> = column
             .nodes
             .iter()
             .map(|&i| {
@@ -206,9 +214,9 @@ fn order_by_upstream(data: &MapData, column_of: &[Option<usize>], columns: &mut 
             })
             .collect();
         keyed.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
-        columns[c].nodes = keyed.into_iter().map(|(_, _, i)| i).collect();
-        let len = columns[c].nodes.len() as f64;
-        for (row, &i) in columns[c].nodes.iter().enumerate() {
+        column.nodes = keyed.into_iter().map(|(_, _, i)| i).collect();
+        let len = column.nodes.len() as f64;
+        for (row, &i) in column.nodes.iter().enumerate() {
             position[i] = (row as f64 + 0.5) / len;
         }
     }
