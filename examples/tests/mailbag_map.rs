@@ -64,6 +64,15 @@ fn assert_well_formed(svg: &str) {
 }
 
 fn assert_entities(text: &str) {
+    // Characters XML 1.0 cannot carry, even escaped.
+    assert!(
+        !text
+            .chars()
+            .any(|c| (c.is_control() && !"\t\n\r".contains(c))
+                || c == '\u{FFFE}'
+                || c == '\u{FFFF}'),
+        "a character XML forbids in {text:?}"
+    );
     for (i, _) in text.match_indices('&') {
         let after = &text[i..];
         assert!(
@@ -238,6 +247,9 @@ fn any_map() -> impl Strategy<Value = MapData> {
         })
 }
 
+/// Names of any printable characters, of any characters, or of those XML forbids or escapes.
+const NASTY_NAME: &str = "\\PC{0,6}|.{0,6}|[\u{0}-\u{1f}\u{fffe}\u{ffff}&<>\"']{1,4}";
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
 
@@ -250,6 +262,18 @@ proptest! {
             let name = node.name.replace('&', "&amp;").replace('<', "&lt;");
             prop_assert!(svg.contains(&name), "{} unnamed", node.name);
         }
+    }
+
+    #[test]
+    fn any_name_and_title_give_well_formed_xml(
+        names in prop::collection::vec(NASTY_NAME, 1..6),
+        title in ".{0,30}",
+    ) {
+        let mut map = plants::example_plant();
+        for (node, name) in map.nodes.iter_mut().zip(names) {
+            node.name = name;
+        }
+        assert_well_formed(&draw(&map, &title));
     }
 
     #[test]

@@ -7,11 +7,34 @@
 //! the legend gives the scale; a section no trolley used is a thin dashed line). A red circle in
 //! a place's box counts the sacks misdelivered there, an orange square the trolleys a reader
 //! rejected to the manual station (area grows with the count, the number beside it); a yellow
-//! warning triangle on a box's corner is an alarm still on at the end of the run.
+//! warning triangle on a box's top edge is an alarm still on at the end of the run. A rail that
+//! skips columns runs level through the gaps between their boxes; one that runs backwards loops
+//! under the columns; the places of a column are grouped by kind, in the data's order.
 //!
 //! Every colour has one meaning: the place kinds' pale fills, one dark colour for rails, red,
 //! orange and yellow only for the marks. Every number printed is finite: zero or unknown hours
 //! give "no time" and thin rails, an empty map says so.
+//!
+//! ```
+//! use regler_examples::mailbag::plant::map::draw;
+//! use regler_examples::mailbag::plant::map_data::{MapData, MapEdge, MapNode, NodeKind};
+//!
+//! let place = |name: &str, kind, layer| MapNode {
+//!     name: name.into(),
+//!     kind,
+//!     layer,
+//!     misdelivered: 0,
+//!     rejected: 0,
+//!     alarm: false,
+//! };
+//! let map = MapData {
+//!     hours: 24.0,
+//!     nodes: vec![place("P1", NodeKind::Loading, 0), place("R1", NodeKind::Reader, 1)],
+//!     edges: vec![MapEdge { from: 0, to: 1, trolleys: 480 }],
+//! };
+//! let svg = draw(&map, "one rail, 24 h");
+//! assert!(svg.starts_with("<svg") && svg.contains(">R1<") && svg.contains("20 /h"));
+//! ```
 
 mod draw;
 mod layout;
@@ -92,6 +115,10 @@ fn amount(v: f64) -> String {
     if !v.is_finite() || v <= 0.0 {
         return "0".into();
     }
+    if v < 0.005 {
+        // Some trolleys, too few to show in two decimals: not "0".
+        return "< 0.01".into();
+    }
     let s = if v >= 10.0 {
         format!("{v:.0}")
     } else if v >= 1.0 {
@@ -129,17 +156,28 @@ fn count_text(count: u64) -> String {
     format!("{value:.digits$}{}", units[unit])
 }
 
+/// `s` as XML text or attribute value: markup escaped, and the characters XML 1.0 cannot
+/// carry at all (control characters but tab and line ends, U+FFFE, U+FFFF) shown as U+FFFD.
 fn escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\t' | '\n' | '\r' => out.push(c),
+            c if c.is_control() || c == '\u{FFFE}' || c == '\u{FFFF}' => out.push('\u{FFFD}'),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// Estimated width of `text` at `font` px (a generous average glyph, so that text stays in its
 /// box with any sans-serif font).
 fn text_w(text: &str, font: f64, bold: bool) -> f64 {
-    text.chars().count() as f64 * font * if bold { 0.66 } else { 0.6 }
+    text.chars().count() as f64 * font * if bold { 0.7 } else { 0.62 }
 }
 
 /// Trolleys per hour on every rail and through every place, and the width scale.
@@ -409,6 +447,7 @@ mod tests {
         assert_eq!(amount(5.0), "5");
         assert_eq!(amount(6.25), "6.2");
         assert_eq!(amount(0.25), "0.25");
+        assert_eq!(amount(0.001), "< 0.01");
         for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             assert_eq!(amount(bad), "0");
         }

@@ -81,10 +81,13 @@ pub(super) fn subtitle(svg: &mut String, data: &MapData, rates: &Rates, width: f
         "{time} · {misdelivered} sacks misdelivered · {rejected} trolleys rejected · {alarms} alarm{} on",
         if alarms == 1 { "" } else { "s" }
     );
+    // Huge counts make a long line: it is set smaller rather than run off the picture.
+    let size = LEGEND_FONT.min((width - 40.0) / (0.62 * text.chars().count() as f64));
     let _ = writeln!(
         svg,
-        r##"<text x="{}" y="62" text-anchor="middle" font-size="{LEGEND_FONT}" fill="#333">{}</text>"##,
+        r##"<text x="{}" y="62" text-anchor="middle" font-size="{}" fill="#333">{}</text>"##,
         n(width / 2.0),
+        n(size),
         escape(&text)
     );
 }
@@ -265,8 +268,8 @@ fn gap_near(layout: &Layout, c: usize, y: f64) -> f64 {
         .unwrap_or(y)
 }
 
-/// A place: its box in its kind's fill, name over rate, marks right-aligned, alarm on the
-/// top-left corner.
+/// A place: its box in its kind's fill, name over rate, marks right-aligned, alarm on its
+/// top edge near the right, clear of the rails and the name.
 pub(super) fn place(
     svg: &mut String,
     i: usize,
@@ -326,7 +329,7 @@ pub(super) fn place(
         let _ = writeln!(
             svg,
             "{}",
-            alarm(&format!(r#" id="alarm-{i}""#), b.x + 2.0, b.y)
+            alarm(&format!(r#" id="alarm-{i}""#), b.right() - 16.0, b.y)
         );
     }
 }
