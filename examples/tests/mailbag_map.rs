@@ -140,6 +140,46 @@ fn example_plant_map_is_well_formed_and_names_every_place() {
     }
 }
 
+/// The box of the place called `name`: (x, y, width, height).
+fn place_box(svg: &str, map: &MapData, name: &str) -> (f64, f64, f64, f64) {
+    let i = map.nodes.iter().position(|n| n.name == name).unwrap();
+    let tag = element(svg, &format!("node-{i}")).unwrap();
+    (
+        attr(tag, "x"),
+        attr(tag, "y"),
+        attr(tag, "width"),
+        attr(tag, "height"),
+    )
+}
+
+#[test]
+fn the_example_reads_left_to_right_with_the_return_rail_under_it() {
+    let map = example_plant();
+    let svg = draw(&map, "t");
+    let b = |name| place_box(&svg, &map, name);
+    // Downstream is to the right: P → R1 → R2 → R5 → D1 → A1, and the docks with the stations.
+    let chain = ["P1", "R1", "R2", "R5", "D1", "A1"];
+    for pair in chain.windows(2) {
+        assert!(b(pair[0]).0 + b(pair[0]).2 < b(pair[1]).0, "{pair:?}");
+    }
+    assert_eq!(b("dock 1").0, b("A1").0);
+    // A column keeps the data's order within a kind: A1 over A2 over A3, D1 over E11.
+    for pair in [["A1", "A2"], ["A2", "A3"], ["D1", "E11"], ["P1", "P3"]] {
+        assert!(b(pair[0]).1 < b(pair[1]).1, "{pair:?}");
+    }
+    // The return rail: under every place, from the loading stations to the docks.
+    let ret = b("return");
+    for node in &map.nodes {
+        if node.name != "return" {
+            let p = b(&node.name);
+            assert!(p.1 + p.3 < ret.1, "{} under the return rail", node.name);
+            assert!(ret.0 < p.0 && p.0 + p.2 < ret.0 + ret.2, "{}", node.name);
+        }
+    }
+    // Loading stations show what they sent: P1 sent 980 trolleys in 24 h.
+    assert!(svg.contains(">41 /h<"), "P1's rate");
+}
+
 #[test]
 fn the_busier_rail_of_the_example_is_wider() {
     let map = example_plant();

@@ -51,10 +51,6 @@ const LEGEND_FONT: f64 = 13.0;
 
 /// Rails, every one of them.
 const RAIL: &str = "#34495e";
-/// Misdelivered sacks: the circle and its number.
-const MISDELIVERED: (&str, &str) = ("#d62728", "#a01515");
-/// Rejected trolleys: the square and its number.
-const REJECTED: (&str, &str) = ("#ff7f0e", "#b35300");
 /// An alarm on at the end of the run.
 const ALARM: &str = "#ffd400";
 
@@ -210,9 +206,16 @@ impl Rates {
                 has_in[e.to] = true;
             }
         }
-        // A place fed from nowhere (a loading station) shows what it sent.
+        // A loading station, or a place fed from nowhere, shows what it sent; every other
+        // place what reached it.
         let node: Vec<f64> = (0..n)
-            .map(|i| if has_in[i] { into[i] } else { out[i] })
+            .map(|i| {
+                if has_in[i] && data.nodes[i].kind != NodeKind::Loading {
+                    into[i]
+                } else {
+                    out[i]
+                }
+            })
             .collect();
         let known =
             hours.is_finite() && hours > 0.0 && edge.iter().chain(&node).all(|r| r.is_finite());
@@ -277,7 +280,51 @@ fn nice_ceiling(max: f64) -> f64 {
         .unwrap_or(max)
 }
 
-/// The largest counts, which get the largest markers.
+/// What a mark in a place's box counts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mark {
+    /// Sacks that ended up here but were meant for somewhere else: a red circle.
+    Misdelivered,
+    /// Trolleys this reader sent to the manual station: an orange square.
+    Rejected,
+}
+
+impl Mark {
+    const ALL: [Mark; 2] = [Mark::Misdelivered, Mark::Rejected];
+
+    /// The word in the mark's id (`misdelivered-7`).
+    fn name(self) -> &'static str {
+        match self {
+            Self::Misdelivered => "misdelivered",
+            Self::Rejected => "rejected",
+        }
+    }
+
+    /// The mark's fill, and the darker ink of its number (readable on a pale box).
+    fn colours(self) -> (&'static str, &'static str) {
+        match self {
+            Self::Misdelivered => ("#d62728", "#a01515"),
+            Self::Rejected => ("#ff7f0e", "#b35300"),
+        }
+    }
+
+    /// What it counts, for the legend and the tooltips.
+    fn words(self) -> &'static str {
+        match self {
+            Self::Misdelivered => "sacks misdelivered here",
+            Self::Rejected => "trolleys a reader rejected to the manual station",
+        }
+    }
+
+    fn count(self, node: &MapNode) -> u64 {
+        match self {
+            Self::Misdelivered => node.misdelivered,
+            Self::Rejected => node.rejected,
+        }
+    }
+}
+
+/// The largest count of each mark on the map, which gets the largest marker.
 struct MarkScale {
     misdelivered: u64,
     rejected: u64,
@@ -285,43 +332,42 @@ struct MarkScale {
 
 impl MarkScale {
     fn new(data: &MapData) -> Self {
-        let nodes = &data.nodes;
+        let largest = |mark: Mark| data.nodes.iter().map(|n| mark.count(n)).max().unwrap_or(0);
         Self {
-            misdelivered: nodes.iter().map(|n| n.misdelivered).max().unwrap_or(0),
-            rejected: nodes.iter().map(|n| n.rejected).max().unwrap_or(0),
+            misdelivered: largest(Mark::Misdelivered),
+            rejected: largest(Mark::Rejected),
         }
+    }
+
+    /// Radius of `mark`'s marker for `count`: its area grows with the count, the largest on
+    /// the map drawn [`MARK_R`].
+    fn radius(&self, mark: Mark, count: u64) -> f64 {
+        let max = match mark {
+            Mark::Misdelivered => self.misdelivered,
+            Mark::Rejected => self.rejected,
+        };
+        let share = if max == 0 {
+            0.0
+        } else {
+            count as f64 / max as f64
+        };
+        4.0 + (MARK_R - 4.0) * share.min(1.0).sqrt()
     }
 }
 
-/// Radius of a marker for `count` of at most `max`: its area grows with the count.
-fn mark_r(count: u64, max: u64) -> f64 {
-    let share = if max == 0 {
-        0.0
-    } else {
-        count as f64 / max as f64
-    };
-    4.0 + (MARK_R - 4.0) * share.sqrt()
-}
-
-/// The marks a place shows: (count, largest, colours) for misdeliveries and rejects.
-fn marks_of(
-    node: &MapNode,
-) -> impl Iterator<Item = (&'static str, u64, (&'static str, &'static str))> {
-    [
-        ("misdelivered", node.misdelivered, MISDELIVERED),
-        ("rejected", node.rejected, REJECTED),
-    ]
-    .into_iter()
-    .filter(|m| m.1 > 0)
+/// The marks a place shows, with their counts.
+fn marks_of(node: &MapNode) -> impl Iterator<Item = (Mark, u64)> + '_ {
+    Mark::ALL
+        .into_iter()
+        .map(|mark| (mark, mark.count(node)))
+        .filter(|m| m.1 > 0)
 }
 
 /// Width a place's box needs: name over rate, then its marks with their numbers.
 fn content_width(node: &MapNode, rate: &str) -> f64 {
     let text = text_w(&node.name, NAME_FONT, true).max(text_w(rate, SMALL_FONT, false));
     let marks: f64 = marks_of(node)
-        .map(|(_, count, _)| {
-            2.0 * MARK_R + 4.0 + text_w(&count_text(count), COUNT_FONT, true) + 8.0
-        })
+        .map(|(_, count)| 2.0 * MARK_R + 4.0 + text_w(&count_text(count), COUNT_FONT, true) + 8.0)
         .sum();
     PAD + text + 12.0 + marks + PAD
 }

@@ -6,8 +6,8 @@ use std::fmt::Write as _;
 use super::super::map_data::{MapData, MapNode, NodeKind};
 use super::layout::{BAR_H, BOX_H, Layout, MIN_WIDTH, ROW_GAP, Rect};
 use super::{
-    ALARM, COUNT_FONT, LEGEND_FONT, MARK_R, MarkScale, NAME_FONT, PAD, RAIL, Rates, Route,
-    SMALL_FONT, TITLE_FONT, amount, count_text, escape, mark_r, marks_of, n, text_w,
+    ALARM, COUNT_FONT, LEGEND_FONT, MARK_R, Mark, MarkScale, NAME_FONT, PAD, RAIL, Rates, Route,
+    SMALL_FONT, TITLE_FONT, amount, count_text, escape, marks_of, n, text_w,
 };
 
 /// The pale fill of each kind of place, and what the legend calls it.
@@ -309,7 +309,8 @@ pub(super) fn place(
     }
     let mut right = b.right() - PAD;
     let cy = b.mid_y();
-    for (what, count, (colour, ink)) in marks_of(node) {
+    for (what, count) in marks_of(node) {
+        let ink = what.colours().1;
         let number = count_text(count);
         let _ = writeln!(
             svg,
@@ -318,11 +319,7 @@ pub(super) fn place(
             n(cy + 5.0)
         );
         right -= text_w(&number, COUNT_FONT, true) + 4.0 + MARK_R;
-        let _ = writeln!(
-            svg,
-            "{}",
-            mark(what, Some(i), right, cy, count, marks, colour)
-        );
+        let _ = writeln!(svg, "{}", mark(what, Some(i), right, cy, count, marks));
         right -= MARK_R + 8.0;
     }
     if node.alarm {
@@ -334,33 +331,28 @@ pub(super) fn place(
     }
 }
 
-/// A mark centred at (x, y): a circle for misdeliveries, a square for rejects.
-fn mark(
-    what: &str,
-    node: Option<usize>,
-    x: f64,
-    y: f64,
-    count: u64,
-    marks: &MarkScale,
-    colour: &str,
-) -> String {
-    let id = node.map_or(String::new(), |i| format!(r#" id="{what}-{i}""#));
-    if what == "misdelivered" {
-        format!(
-            r#"<circle{id} cx="{}" cy="{}" r="{}" fill="{colour}"><title>{count} sacks misdelivered here</title></circle>"#,
+/// A mark centred at (x, y): a circle for misdeliveries, a square for rejects; `node` gives
+/// it its id (`misdelivered-7`), the legend's marks have none.
+fn mark(what: Mark, node: Option<usize>, x: f64, y: f64, count: u64, marks: &MarkScale) -> String {
+    let id = node.map_or(String::new(), |i| format!(r#" id="{}-{i}""#, what.name()));
+    let (colour, _) = what.colours();
+    let r = marks.radius(what, count);
+    let title = format!("<title>{count} {}</title>", what.words());
+    match what {
+        Mark::Misdelivered => format!(
+            r#"<circle{id} cx="{}" cy="{}" r="{}" fill="{colour}">{title}</circle>"#,
             n(x),
             n(y),
-            n(mark_r(count, marks.misdelivered))
-        )
-    } else {
-        let half = mark_r(count, marks.rejected) * 0.9;
-        format!(
-            r#"<rect{id} x="{}" y="{}" width="{}" height="{}" fill="{colour}"><title>{count} trolleys rejected to the manual station here</title></rect>"#,
-            n(x - half),
-            n(y - half),
-            n(2.0 * half),
-            n(2.0 * half)
-        )
+            n(r)
+        ),
+        // A square of about the circle's area.
+        Mark::Rejected => format!(
+            r#"<rect{id} x="{}" y="{}" width="{}" height="{}" fill="{colour}">{title}</rect>"#,
+            n(x - 0.9 * r),
+            n(y - 0.9 * r),
+            n(1.8 * r),
+            n(1.8 * r)
+        ),
     }
 }
 
@@ -446,30 +438,17 @@ pub(super) fn legend(svg: &mut String, data: &MapData, rates: &Rates, marks: &Ma
     // Rows 3 and 4: the marks.
     let y = top + 76.0;
     let mut x = text(svg, x0, y, "Marks", true);
-    let entries: [(&str, u64, &str); 2] = [
-        (
-            "misdelivered",
-            marks.misdelivered,
-            "sacks misdelivered here",
-        ),
-        (
-            "rejected",
-            marks.rejected,
-            "trolleys a reader rejected to the manual station",
-        ),
-    ];
-    for (what, largest, words) in entries {
-        let colour = if what == "misdelivered" {
-            super::MISDELIVERED.0
-        } else {
-            super::REJECTED.0
+    for what in Mark::ALL {
+        let largest = match what {
+            Mark::Misdelivered => marks.misdelivered,
+            Mark::Rejected => marks.rejected,
         };
         let _ = writeln!(
             svg,
             "{}",
-            mark(what, None, x + MARK_R, y, largest.max(1), marks, colour)
+            mark(what, None, x + MARK_R, y, largest.max(1), marks)
         );
-        x = text(svg, x + 2.0 * MARK_R + 6.0, y, words, false);
+        x = text(svg, x + 2.0 * MARK_R + 6.0, y, what.words(), false);
     }
     let _ = writeln!(svg, "{}", alarm("", x + 9.0, y));
     text(svg, x + 24.0, y, "alarm on at the end of the run", false);
