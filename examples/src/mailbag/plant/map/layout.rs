@@ -1,8 +1,9 @@
 //! Where each place of the plant map goes: one column per `layer` (loading stations left,
 //! downstream to the right), the nodes of a column ordered to follow their upstream places
-//! (fewer crossing rails), the return rail as a bar along the bottom, the legend under it.
+//! (fewer crossing rails), the return rail as a bar along the bottom, the legend under it; and
+//! how each rail runs between them.
 
-use super::super::map_data::{MapData, NodeKind};
+use super::super::map_data::{MapData, MapEdge, MapNode, NodeKind};
 
 /// Height of a place's box.
 pub(super) const BOX_H: f64 = 40.0;
@@ -220,4 +221,92 @@ fn order_by_upstream(data: &MapData, column_of: &[Option<usize>], columns: &mut 
             position[i] = (row as f64 + 0.5) / len;
         }
     }
+}
+
+/// How a rail is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Route {
+    /// Rightwards, from column to column.
+    Forward,
+    /// Back or within a column: a loop under the columns.
+    Back,
+    /// Into the return rail, by the trunk right of its place's column.
+    IntoReturn,
+    /// Out of the return rail, by the trunk left of its place's column.
+    FromReturn,
+    /// Not drawn: an end is missing, a loop on one place, or return to return.
+    Skip,
+}
+
+impl Route {
+    pub(super) fn of(data: &MapData, e: &MapEdge) -> Self {
+        let (Some(from), Some(to)) = (data.nodes.get(e.from), data.nodes.get(e.to)) else {
+            return Self::Skip;
+        };
+        let ret = |n: &MapNode| n.kind == NodeKind::Return;
+        match (ret(from), ret(to)) {
+            _ if e.from == e.to => Self::Skip,
+            (true, true) => Self::Skip,
+            (false, true) => Self::IntoReturn,
+            (true, false) => Self::FromReturn,
+            (false, false) if to.layer > from.layer => Self::Forward,
+            (false, false) => Self::Back,
+        }
+    }
+}
+
+/// Where each rail leaves and enters its places: `(start y, end y)`, spread over the box's
+/// side in the order of the other ends, so that rails fan out instead of piling up.
+pub(super) fn attachments(data: &MapData, layout: &Layout, routes: &[Route]) -> Vec<(f64, f64)> {
+    let boxes = &layout.boxes;
+    let mut ends: Vec<(f64, f64)> = data
+        .edges
+        .iter()
+        .map(|e| {
+            let mid = |i: usize| boxes.get(i).map_or(0.0, |b| b.mid_y());
+            (mid(e.from), mid(e.to))
+        })
+        .collect();
+    for i in 0..data.nodes.len() {
+        for leaving in [true, false] {
+            let mut side: Vec<(f64, usize)> = data
+                .edges
+                .iter()
+                .enumerate()
+                .filter(|&(k, e)| {
+                    let r = routes[k];
+                    if leaving {
+                        e.from == i && matches!(r, Route::Forward | Route::IntoReturn | Route::Back)
+                    } else {
+                        e.to == i && matches!(r, Route::Forward | Route::FromReturn | Route::Back)
+                    }
+                })
+                .map(|(k, e)| {
+                    // Rails that loop back under the columns leave and enter lowest.
+                    let other = if routes[k] == Route::Back {
+                        f64::MAX
+                    } else {
+                        boxes[if leaving { e.to } else { e.from }].mid_y()
+                    };
+                    (other, k)
+                })
+                .collect();
+            side.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let count = side.len() as f64;
+            let step = if side.len() > 1 {
+                ((BOX_H - 12.0) / (count - 1.0)).min(7.0)
+            } else {
+                0.0
+            };
+            for (rank, &(_, k)) in side.iter().enumerate() {
+                let y = boxes[i].mid_y() + (rank as f64 - (count - 1.0) / 2.0) * step;
+                if leaving {
+                    ends[k].0 = y;
+                } else {
+                    ends[k].1 = y;
+                }
+            }
+        }
+    }
+    ends
 }
