@@ -7,7 +7,7 @@ use super::super::map_data::{MapData, MapNode, NodeKind};
 use super::layout::{BAR_H, BOX_H, Layout, MIN_WIDTH, ROW_GAP, Rect};
 use super::{
     ALARM, COUNT_FONT, LEGEND_FONT, MARK_R, Mark, MarkScale, NAME_FONT, PAD, RAIL, Rates, Route,
-    SMALL_FONT, TITLE_FONT, amount, count_text, escape, marks_of, n, text_w,
+    SMALL_FONT, TITLE_FONT, amount, count_text, escape, marks_of, n, nice_ceiling, text_w,
 };
 
 /// The pale fill of each kind of place, and what the legend calls it.
@@ -390,8 +390,13 @@ pub(super) fn legend(svg: &mut String, data: &MapData, rates: &Rates, marks: &Ma
     let mut x = text(svg, x0, y, "Rails", true);
     if rates.known {
         x = text(svg, x, y, "width = trolleys per hour:", false);
-        for share in [0.25, 0.5, 1.0] {
-            let rate = rates.scale * share;
+        // Round samples: a quarter and a half of the scale, rounded up, and the scale.
+        let samples = [
+            nice_ceiling(rates.scale * 0.25),
+            nice_ceiling(rates.scale * 0.5),
+            rates.scale,
+        ];
+        for rate in samples {
             let _ = writeln!(
                 svg,
                 r#"<path d="M{} {} h36" {}/>"#,
