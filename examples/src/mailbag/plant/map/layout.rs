@@ -267,30 +267,22 @@ pub(super) fn attachments(data: &MapData, layout: &Layout, routes: &[Route]) -> 
             (mid(e.from), mid(e.to))
         })
         .collect();
-    for i in 0..data.nodes.len() {
-        for leaving in [true, false] {
-            let mut side: Vec<(f64, usize)> = data
-                .edges
-                .iter()
-                .enumerate()
-                .filter(|&(k, e)| {
-                    let r = routes[k];
-                    if leaving {
-                        e.from == i && matches!(r, Route::Forward | Route::IntoReturn | Route::Back)
-                    } else {
-                        e.to == i && matches!(r, Route::Forward | Route::FromReturn | Route::Back)
-                    }
-                })
-                .map(|(k, e)| {
-                    // Rails that loop back under the columns leave and enter lowest.
-                    let other = if routes[k] == Route::Back {
-                        f64::MAX
-                    } else {
-                        boxes[if leaving { e.to } else { e.from }].mid_y()
-                    };
-                    (other, k)
-                })
-                .collect();
+    // Each node's two sides: the rails leaving on its right, those entering on its left, each
+    // with the height of its other end (rails that loop back under the columns lowest).
+    let n = data.nodes.len();
+    let mut sides: Vec<[Vec<(f64, usize)>; 2]> = vec![[Vec::new(), Vec::new()]; n];
+    for (k, e) in data.edges.iter().enumerate() {
+        let back = routes[k] == Route::Back;
+        let other = |i: usize| if back { f64::MAX } else { boxes[i].mid_y() };
+        if matches!(routes[k], Route::Forward | Route::IntoReturn | Route::Back) {
+            sides[e.from][0].push((other(e.to), k));
+        }
+        if matches!(routes[k], Route::Forward | Route::FromReturn | Route::Back) {
+            sides[e.to][1].push((other(e.from), k));
+        }
+    }
+    for (i, [leaving, entering]) in sides.iter_mut().enumerate() {
+        for (side, out) in [(leaving, true), (entering, false)] {
             side.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             let count = side.len() as f64;
             let step = if side.len() > 1 {
@@ -300,7 +292,7 @@ pub(super) fn attachments(data: &MapData, layout: &Layout, routes: &[Route]) -> 
             };
             for (rank, &(_, k)) in side.iter().enumerate() {
                 let y = boxes[i].mid_y() + (rank as f64 - (count - 1.0) / 2.0) * step;
-                if leaving {
+                if out {
                     ends[k].0 = y;
                 } else {
                     ends[k].1 = y;
