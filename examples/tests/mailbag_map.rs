@@ -109,6 +109,91 @@ fn rail_width(svg: &str, k: usize) -> Option<f64> {
     element(svg, &format!("rail-{k}")).map(|tag| attr(tag, "stroke-width"))
 }
 
+/// Every box of the picture (places and the return rail's bars): (x, y, width, height).
+fn all_boxes(svg: &str, map: &MapData) -> Vec<(f64, f64, f64, f64)> {
+    (0..map.nodes.len())
+        .map(|i| {
+            let tag = element(svg, &format!("node-{i}")).unwrap();
+            (
+                attr(tag, "x"),
+                attr(tag, "y"),
+                attr(tag, "width"),
+                attr(tag, "height"),
+            )
+        })
+        .collect()
+}
+
+/// The straight and curved pieces of every rail's path, as the boxes they sweep:
+/// (x from, x to, y from, y to). Paths use M, H, V and C (curves with their control points
+/// between their ends, so they stay within the box of their ends).
+fn rail_pieces(svg: &str) -> Vec<(f64, f64, f64, f64)> {
+    let mut pieces = Vec::new();
+    for path in svg.split("<path").skip(1) {
+        if !(path.contains(r#" id="rail-"#) || path.contains(r#"class="trunk""#)) {
+            continue;
+        }
+        let d = path
+            .split(r#" d=""#)
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap();
+        let mut words = d.split_whitespace().peekable();
+        let (mut x, mut y) = (0.0, 0.0);
+        let num = |w: &str| -> f64 {
+            w.trim_start_matches(|c: char| c.is_ascii_alphabetic())
+                .parse()
+                .unwrap()
+        };
+        while let Some(word) = words.next() {
+            let (x0, y0) = (x, y);
+            match &word[..1] {
+                "M" => {
+                    x = num(word);
+                    y = num(words.next().unwrap());
+                    continue;
+                }
+                "H" => x = num(word),
+                "V" => y = num(word),
+                "C" => {
+                    for _ in 0..3 {
+                        words.next();
+                    }
+                    x = num(words.next().unwrap());
+                    y = num(words.next().unwrap());
+                }
+                other => panic!("path command {other} in {d}"),
+            }
+            pieces.push((x0.min(x), x0.max(x), y0.min(y), y0.max(y)));
+        }
+    }
+    pieces
+}
+
+/// Rails run in the gutters and the gaps between boxes, never through one. (Coordinates are
+/// written with one decimal, so an end on a box's side may sit 0.1 px inside it.)
+fn assert_rails_clear_of_boxes(svg: &str, map: &MapData) {
+    const SLACK: f64 = 0.15;
+    let inside = |a0: f64, a1: f64, b0: f64, b1: f64| {
+        if a0 == a1 {
+            b0 + SLACK < a0 && a0 < b1 - SLACK
+        } else {
+            a0.max(b0) < a1.min(b1) - SLACK
+        }
+    };
+    let boxes = all_boxes(svg, map);
+    for (x0, x1, y0, y1) in rail_pieces(svg) {
+        for &(bx, by, bw, bh) in &boxes {
+            assert!(
+                !(inside(x0, x1, bx, bx + bw) && inside(y0, y1, by, by + bh)),
+                "rail piece x {x0}..{x1} y {y0}..{y1} through the box at ({bx}, {by}) {bw} x {bh}"
+            );
+        }
+    }
+}
+
 #[test]
 fn example_plant_map_is_well_formed_and_names_every_place() {
     let map = example_plant();
@@ -117,6 +202,7 @@ fn example_plant_map_is_well_formed_and_names_every_place() {
         std::fs::write(path, &svg).unwrap();
     }
     assert_well_formed(&svg);
+    assert_rails_clear_of_boxes(&svg, &map);
     assert!(svg.contains(">voting, 24 h, seed 1977<"));
     for node in &map.nodes {
         assert!(
@@ -372,6 +458,7 @@ proptest! {
     #[test]
     fn boxes_never_overlap_and_stay_in_the_picture(map in any_map()) {
         let svg = draw(&map, "boxes");
+        assert_rails_clear_of_boxes(&svg, &map);
         let (w, h) = {
             let root = &svg[..svg.find('>').unwrap()];
             (attr(root, "width"), attr(root, "height"))
@@ -396,6 +483,7 @@ proptest! {
 fn a_crowded_map_keeps_its_boxes_apart() {
     let map = crowded_plant();
     let svg = draw(&map, "crowded: 8 layers, up to 20 places each, huge counts");
+    assert_rails_clear_of_boxes(&svg, &map);
     if let Ok(path) = std::env::var("MAP_SVG_OUT_CROWDED") {
         std::fs::write(path, &svg).unwrap();
     }

@@ -89,7 +89,8 @@ pub fn draw(data: &MapData, title: &str) -> String {
     let attach = attachments(data, &layout, &routes);
     rails(&mut svg, data, &layout, &routes, &attach, &rates);
     for (i, node) in data.nodes.iter().enumerate() {
-        place(&mut svg, i, node, layout.boxes[i], &rates, &marks);
+        let bar = layout.column_of[i].is_none();
+        place(&mut svg, i, node, layout.boxes[i], bar, &rates, &marks);
     }
     legend(&mut svg, data, &rates, &marks, layout.legend_top);
     svg.push_str("</svg>\n");

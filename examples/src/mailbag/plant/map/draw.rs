@@ -268,13 +268,14 @@ fn gap_near(layout: &Layout, c: usize, y: f64) -> f64 {
         .unwrap_or(y)
 }
 
-/// A place: its box in its kind's fill, name over rate, marks right-aligned, alarm on its
+/// A place (or the return rail's `bar`): its box in its kind's fill, name over rate, marks right-aligned, alarm on its
 /// top edge near the right, clear of the rails and the name.
 pub(super) fn place(
     svg: &mut String,
     i: usize,
     node: &MapNode,
     b: Rect,
+    bar: bool,
     rates: &Rates,
     marks: &MarkScale,
 ) {
@@ -289,7 +290,7 @@ pub(super) fn place(
         n(b.w),
         n(b.h)
     );
-    if node.kind == NodeKind::Return {
+    if bar {
         // The bar: name and rate side by side in its middle.
         let _ = writeln!(
             svg,

@@ -3,7 +3,7 @@
 //! (fewer crossing rails), the return rail as a bar along the bottom, the legend under it; and
 //! how each rail runs between them.
 
-use super::super::map_data::{MapData, MapEdge, MapNode, NodeKind};
+use super::super::map_data::{MapData, MapEdge, NodeKind};
 
 /// Height of a place's box.
 pub(super) const BOX_H: f64 = 40.0;
@@ -84,12 +84,20 @@ pub(super) struct Layout {
     pub height: f64,
 }
 
+/// The return rail drawn as the bar along the bottom: the first place of kind
+/// [`NodeKind::Return`]. The plant has one; any further one is drawn as an ordinary place in its
+/// layer's column, so that no rail has to cross a bar to reach another.
+pub(super) fn return_rail(data: &MapData) -> Option<usize> {
+    data.nodes.iter().position(|n| n.kind == NodeKind::Return)
+}
+
 impl Layout {
     /// Lays out `data`'s nodes, each as wide as `content_w[node]` asks; `dip` is the room
     /// under the columns for rails that run backwards.
     pub fn new(data: &MapData, content_w: &[f64], dip: f64) -> Self {
         let n = data.nodes.len();
-        let is_return = |i: usize| data.nodes[i].kind == NodeKind::Return;
+        let bar = return_rail(data);
+        let is_return = |i: usize| Some(i) == bar;
         let mut layers: Vec<u8> = (0..n)
             .filter(|&i| !is_return(i))
             .map(|i| data.nodes[i].layer)
@@ -158,17 +166,17 @@ impl Layout {
             (Some(first), Some(last)) => (first.x - MARGIN + 10.0, last.right() + MARGIN - 10.0),
             _ => (MARGIN, width - MARGIN),
         };
-        let mut y = graph_bottom + 55.0 + dip;
-        for i in (0..n).filter(|&i| is_return(i)) {
+        let mut bottom = graph_bottom + dip;
+        if let Some(i) = bar {
             boxes[i] = Rect {
                 x: left,
-                y,
+                y: bottom + 55.0,
                 w: right - left,
                 h: BAR_H,
             };
-            y += BAR_H + 40.0;
+            bottom = boxes[i].bottom();
         }
-        let legend_top = y + 25.0;
+        let legend_top = bottom + 65.0;
         Self {
             boxes,
             column_of,
@@ -234,7 +242,7 @@ pub(super) enum Route {
     IntoReturn,
     /// Out of the return rail, by the trunk left of its place's column.
     FromReturn,
-    /// Not drawn: an end is missing, a loop on one place, or return to return.
+    /// Not drawn: an end is missing, or a loop on one place.
     Skip,
 }
 
@@ -243,9 +251,10 @@ impl Route {
         let (Some(from), Some(to)) = (data.nodes.get(e.from), data.nodes.get(e.to)) else {
             return Self::Skip;
         };
-        let ret = |n: &MapNode| n.kind == NodeKind::Return;
-        match (ret(from), ret(to)) {
+        let bar = return_rail(data);
+        match (Some(e.from) == bar, Some(e.to) == bar) {
             _ if e.from == e.to => Self::Skip,
+            // Only a loop on the bar, caught above.
             (true, true) => Self::Skip,
             (false, true) => Self::IntoReturn,
             (true, false) => Self::FromReturn,
