@@ -171,10 +171,24 @@ fn escape(s: &str) -> String {
     out
 }
 
-/// Estimated width of `text` at `font` px (a generous average glyph, so that text stays in its
-/// box with any sans-serif font).
+/// Estimated width of `text` at `font` px: each glyph's width in em, a little over DejaVu
+/// Sans' (the usual sans-serif where SVGs are turned into PNGs), so that text stays in its box.
 fn text_w(text: &str, font: f64, bold: bool) -> f64 {
-    text.chars().count() as f64 * font * if bold { 0.7 } else { 0.62 }
+    let em: f64 = text
+        .chars()
+        .map(|c| match c {
+            ' ' | 'i' | 'j' | 'l' | '!' | '.' | ',' | ':' | ';' | '\'' | '|' => 0.36,
+            'f' | 'r' | 't' | 'I' | 'J' | '(' | ')' | '[' | ']' | '-' | '/' => 0.48,
+            'm' | 'w' => 1.0,
+            'M' | 'W' => 1.08,
+            '0'..='9' | 'a'..='z' => 0.66,
+            'A'..='Z' | '#' | '%' | '&' | '<' | '>' | '?' | '@' => 0.8,
+            c if c.is_ascii() => 0.66,
+            // Beyond ASCII: up to a full em (CJK), so reckon with one.
+            _ => 1.0,
+        })
+        .sum();
+    em * font * if bold { 1.1 } else { 1.0 }
 }
 
 /// Trolleys per hour on every rail and through every place, and the width scale.
@@ -398,6 +412,15 @@ mod tests {
                 count_text(count)
             );
         }
+    }
+
+    #[test]
+    fn wide_letters_are_reckoned_wide() {
+        assert!(text_w("WWW", 10.0, false) > 3.0 * 10.0);
+        assert!(text_w("iii", 10.0, false) < text_w("eee", 10.0, false));
+        assert!(text_w("E10", 15.0, true) > text_w("E10", 15.0, false));
+        assert!(text_w("郵便", 10.0, false) >= 20.0);
+        assert_eq!(text_w("", 10.0, true), 0.0);
     }
 
     #[test]

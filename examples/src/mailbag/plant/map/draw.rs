@@ -35,7 +35,8 @@ const KINDS: [NodeKind; 7] = [
 
 pub(super) fn header(title: &str, width: f64, height: f64) -> String {
     // A long title is set smaller rather than cut.
-    let size = TITLE_FONT.min((width - 40.0) / (0.62 * title.chars().count().max(1) as f64));
+    let size =
+        TITLE_FONT.min(TITLE_FONT * (width - 40.0) / text_w(title, TITLE_FONT, true).max(1.0));
     format!(
         r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="{SMALL_FONT}">
 <rect width="100%" height="100%" fill="white"/>
@@ -82,7 +83,8 @@ pub(super) fn subtitle(svg: &mut String, data: &MapData, rates: &Rates, width: f
         if alarms == 1 { "" } else { "s" }
     );
     // Huge counts make a long line: it is set smaller rather than run off the picture.
-    let size = LEGEND_FONT.min((width - 40.0) / (0.62 * text.chars().count() as f64));
+    let size =
+        LEGEND_FONT.min(LEGEND_FONT * (width - 40.0) / text_w(&text, LEGEND_FONT, false).max(1.0));
     let _ = writeln!(
         svg,
         r##"<text x="{}" y="62" text-anchor="middle" font-size="{}" fill="#333">{}</text>"##,
