@@ -117,6 +117,16 @@ impl Simulator {
                         cli::excerpt(s)
                     )
                 })
+                .and_then(|p| {
+                    // Input word 1 is the belt encoder's counter, not 16 points.
+                    if (16..32).contains(&p) {
+                        Err(format!(
+                            "no such point: {p} (16-31 would be the belt encoder's counter word; points are 0-15)"
+                        ))
+                    } else {
+                        Ok(p)
+                    }
+                })
         };
         let level = |s: &str| -> Result<bool, String> {
             match s {
