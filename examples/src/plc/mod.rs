@@ -26,6 +26,15 @@
 //! held behind the stuck one, and they went on — 40 of 602 bad parts in ten seeded ten-minute
 //! runs with 119 jams (`tests/plc_conveyor_tracking.rs`). Counted by the encoder, none pass.
 //!
+//! # Power failure
+//! [`Simulator::power_failure`] (the monitor's `powerfail MS`): the executive writes the safe
+//! outputs and freezes, the program's battery-backed memory keeps a [`program::Retained`] — the
+//! tracker's snapshot (the bad parts on their way, the gate's hold), the edges, the counts and
+//! the spool —, the program starts again from power-on with it, and the executive resumes with
+//! `Restart::Inhibit` (the motor stays off until START). The encoder's counter card restarts from
+//! 0 with the power; the first scan takes it as the new reference (the belt cannot move
+//! unpowered). No tracked part is lost: every bad part in flight reaches the gate.
+//!
 //! # The timing model
 //! One cycle every [`PERIOD_MS`] = 50 ms (the 1977 plant's period). In a simulated run the
 //! executive reads the plant's clock twice a cycle and each read costs the simulated CPU 1 ms, so

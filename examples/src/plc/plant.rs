@@ -45,8 +45,10 @@ pub struct Plant {
     pub tally: Tally,
     press: Vec<(u32, usize, u32)>,
     jam_since_ms: Option<u32>,
-    /// Belt travel since power-on, mm: the encoder counts one pulse per [`MM_PER_PULSE`] of it.
+    /// Belt travel, mm: the encoder counts one pulse per [`MM_PER_PULSE`] of it since
+    /// `encoder_from_mm`, where the power last came on.
     belt_mm: u64,
+    encoder_from_mm: u64,
     /// Scheduled stalls: from `at_ms` for `for_ms`.
     stalls: Vec<(u32, u32)>,
 }
@@ -89,6 +91,7 @@ impl Plant {
             press: vec![(500, input::START, 200)],
             jam_since_ms: None,
             belt_mm: 0,
+            encoder_from_mm: 0,
             stalls: Vec::new(),
         }
     }
@@ -109,7 +112,18 @@ impl Plant {
     /// The belt encoder's counter card: one pulse per [`MM_PER_PULSE`] mm, 16 bits, wrapping.
     #[must_use]
     pub fn encoder(&self) -> u16 {
-        ((self.belt_mm / u64::from(MM_PER_PULSE)) & 0xffff) as u16
+        (((self.belt_mm - self.encoder_from_mm) / u64::from(MM_PER_PULSE)) & 0xffff) as u16
+    }
+
+    /// The power is off for `ms` (the outputs are the safe ones the executive wrote: the motor
+    /// is off, the belt stands): time passes; when the power comes back the encoder's counter
+    /// card starts again from 0, and the operator presses START 1 s later.
+    pub fn power_cut(&mut self, ms: u32) {
+        self.advance(ms);
+        self.encoder_from_mm = self.belt_mm;
+        self.inputs[input::ENCODER_WORD] = self.encoder();
+        let now = self.now_ms();
+        self.press(now + 1_000, input::START, 200);
     }
 
     /// Presses a push-button at `at_ms` for `for_ms`.

@@ -9,7 +9,7 @@
 //! and their countdowns stand still together), then enters the bad part the quality sensor
 //! flagged in this scan.
 
-use regler_chain_tracker::{DistanceTable, TipperEvent, Tracker};
+use regler_chain_tracker::{DistanceTable, Snapshot, TipperEvent, Tracker, TrackerError};
 use regler_scan_cycle::{Ctu, RTrig, Scan, Spool, Sr, Ton};
 
 use super::{IW, OW, input, output};
@@ -46,6 +46,8 @@ pub struct Conveyor {
     parts: Ctu,
     part_edge: RTrig,
     bad_edge: RTrig,
+    /// Parts counted before the last power failure (the CTU restarts from 0).
+    parts_before: i32,
     tracker: GateTracker,
     /// The encoder count read in the last scan (`None` before the first).
     encoder: Option<u16>,
@@ -66,6 +68,26 @@ pub const GATE_PULSES: u32 = 200;
 /// past the gate, and the next part, at least 400 mm behind it, has not.
 pub const HOLD_PULSES: u32 = 30;
 
+/// What the program keeps through a power failure (its battery-backed memory): the tracker's
+/// [`Snapshot`] — the bad parts on their way to the gate and the gate's hold —, the edges'
+/// memories (a part under a sensor when the power went is not counted or flagged twice), the
+/// counts and the spool. The rest starts from power-on: the motor's latch (off until START: the
+/// executive restarts with `Restart::Inhibit`), the jam detector, and the encoder count last read
+/// (the counter card restarts from 0 with the power, so the first scan takes a new reference; the
+/// belt cannot move without power, so no travel is missed).
+#[derive(Clone, Debug)]
+pub struct Retained {
+    /// The tracker's snapshot.
+    pub tracker: Snapshot<u32, TRACKED, 1>,
+    part_edge: RTrig,
+    bad_edge: RTrig,
+    parts: i32,
+    bad_flagged: u32,
+    untracked: u32,
+    spool: Spool<Report, 8>,
+    spool_refused: u32,
+}
+
 impl Default for Conveyor {
     fn default() -> Self {
         Conveyor::new()
@@ -83,6 +105,7 @@ impl Conveyor {
             parts: Ctu::new(i32::MAX),
             part_edge: RTrig::new(),
             bad_edge: RTrig::new(),
+            parts_before: 0,
             tracker: gate_tracker(),
             encoder: None,
             bad_flagged: 0,
@@ -93,10 +116,45 @@ impl Conveyor {
         }
     }
 
-    /// Parts counted (CTU's CV).
+    /// Parts counted (CTU's CV, plus what it had counted before the last power failure).
     #[must_use]
     pub fn parts(&self) -> i32 {
-        self.parts.cv()
+        self.parts_before.saturating_add(self.parts.cv())
+    }
+
+    /// What a power failure must keep (see [`Retained`]).
+    #[must_use]
+    pub fn retain(&self) -> Retained {
+        Retained {
+            tracker: self.tracker.snapshot(),
+            part_edge: self.part_edge,
+            bad_edge: self.bad_edge,
+            parts: self.parts(),
+            bad_flagged: self.bad_flagged,
+            untracked: self.untracked,
+            spool: self.spool.clone(),
+            spool_refused: self.spool_refused,
+        }
+    }
+
+    /// The program after a power failure: from power-on, with what [`retain`](Self::retain)
+    /// kept, so the bad parts in flight are tracked on from where they stood and the gate is
+    /// open again if it was holding.
+    ///
+    /// # Errors
+    /// The tracker refused the snapshot (another program's, or corrupt).
+    pub fn power_on(retained: &Retained) -> Result<Conveyor, TrackerError> {
+        let mut program = Conveyor::new();
+        program.tracker.restore(&retained.tracker)?;
+        program.gate = program.tracker.is_set(0);
+        program.part_edge = retained.part_edge;
+        program.bad_edge = retained.bad_edge;
+        program.parts_before = retained.parts;
+        program.bad_flagged = retained.bad_flagged;
+        program.untracked = retained.untracked;
+        program.spool = retained.spool.clone();
+        program.spool_refused = retained.spool_refused;
+        Ok(program)
     }
 
     /// The jam timer's elapsed time, ms.
@@ -130,10 +188,10 @@ impl Conveyor {
             .call(i.get(input::START) && !jammed, i.get(input::STOP) || jammed);
         if self.part_edge.call(part) {
             self.parts.call(true, false);
-            if self.parts.cv() % 10 == 0
+            if self.parts() % 10 == 0
                 && self
                     .spool
-                    .push(Report::Batch(self.parts.cv().unsigned_abs()))
+                    .push(Report::Batch(self.parts().unsigned_abs()))
                     .is_err()
             {
                 self.spool_refused += 1;

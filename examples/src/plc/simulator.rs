@@ -3,7 +3,7 @@
 //! diagram records every cycle's images.
 
 use regler_scan_cycle::{
-    Breakpoint, CycleConfig, DateTime, Executive, Halt, MinuteTable, Start, Weekdays,
+    Breakpoint, CycleConfig, DateTime, Executive, Halt, MinuteTable, Restart, Start, Weekdays,
 };
 use serde::Serialize;
 
@@ -49,6 +49,8 @@ pub struct Simulator {
     pub clock: DateTime,
     /// Shift changes: programs started at given minutes.
     pub table: MinuteTable<Report, 4>,
+    /// Power failures survived.
+    pub power_failures: u32,
 }
 
 impl Simulator {
@@ -84,7 +86,30 @@ impl Simulator {
             reports_run: 0,
             clock: DateTime::new(2026, 11, 23, 13, 58, 30).unwrap_or_else(|_| unreachable!()),
             table,
+            power_failures: 0,
         }
+    }
+
+    /// A power failure of `ms` between two cycles: the executive writes the safe outputs (motor
+    /// off, gate closed) and freezes; the program's battery-backed memory keeps what
+    /// [`Conveyor::retain`] takes (the tracker's snapshot among it); the plant stands for `ms`;
+    /// then the program starts from power-on with what was kept ([`Conveyor::power_on`]) and
+    /// the executive resumes with [`Restart::Inhibit`] (the motor stays off until the operator
+    /// presses START, 1 s after the power is back). The calendar goes on by the plant's clock.
+    ///
+    /// # Errors
+    /// The tracker refused the kept snapshot: the program runs on without the outage.
+    pub fn power_failure(&mut self, ms: u32) -> Result<(), regler_chain_tracker::TrackerError> {
+        let kept = self.program.retain();
+        let program = Conveyor::power_on(&kept)?;
+        self.plc.power_fail(&mut self.plant);
+        self.plant.power_cut(ms);
+        self.plc.capture(&self.plant.inputs);
+        self.clock.advance(ms);
+        self.program = program;
+        self.plc.resume(Restart::Inhibit);
+        self.power_failures += 1;
+        Ok(())
     }
 
     /// Runs up to `cycles` cycles, stopping at a breakpoint; returns the cycles run and why it
