@@ -16,9 +16,10 @@ use regler_examples::plc::summary::{self, Summary};
 use regler_examples::plc::{DEMO_SCRIPT, SIGNALS, Simulator, TRACE_CAP, modbus, picture};
 
 /// Rebuilds the 1989 industrial microcomputer controller as a soft-PLC running a conveyor section
-/// (start/stop, jam detector, part counter, reject gate from the timer register) against a
-/// simulated plant. Monitor commands: run N, step, cont, break cycle N, break in|out POINT on|off,
-/// clear breaks, force in|out POINT 0|1, unforce in|out POINT, show, spool, stats, help, quit.
+/// (start/stop, jam detector, part counter, reject gate set by bad parts tracked by the belt
+/// encoder's pulses) against a simulated plant. Monitor commands: run N, step, cont, break cycle N, break in|out POINT on|off,
+/// clear breaks, force in|out POINT 0|1, unforce in|out POINT, powerfail MS, show, spool, stats,
+/// help, quit.
 /// Points are numbers or names (start, stop, part, bad, reset; motor, jam, gate, run).
 #[derive(Debug, Parser)]
 #[command(

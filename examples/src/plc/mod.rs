@@ -6,15 +6,34 @@
 //!
 //! # The conveyor section
 //! Inputs: 0 START, 1 STOP, 2 PART (photo eye at the reject gate), 3 BAD (a quality sensor
-//! 2 s up the belt flags a bad part), 4 RESET (jam reset). Outputs: 0 MOTOR, 1 JAM lamp,
-//! 2 GATE (reject gate), 3 RUN lamp.
+//! 2 m up the belt flags a bad part), 4 RESET (jam reset); input word 1 is the belt encoder's
+//! counter card (one pulse per [`MM_PER_PULSE`] mm of belt travel, a 16-bit count that wraps).
+//! Outputs: 0 MOTOR, 1 JAM lamp, 2 GATE (reject gate), 3 RUN lamp.
 //!
 //! The program: the motor is latched by START and dropped by STOP or a jam (an SR block); a part
 //! covering the photo eye for more than 3 s is a jam (TON) until RESET; every part passing the
 //! eye is counted (CTU) and every tenth part queues a batch report on the spool; a bad part at the
-//! quality sensor inserts "open gate" into the timer register (source 000's) for when it reaches
-//! the gate, and the opening inserts "close gate" 0.6 s later. The register ticks only while the
-//! belt runs, so a jam does not throw the gate out of step with the parts.
+//! quality sensor is entered into a `regler_chain_tracker::Tracker`, which counts the belt's
+//! encoder pulses down ([`program::GATE_PULSES`], 2 m) and opens the gate when the part reaches
+//! it, closing it [`program::HOLD_PULSES`] pulses (0.3 m) later — as source 000's dock chains
+//! track trolleys to their tippers by chain pulses.
+//!
+//! The parts are tracked by the belt's movement, not by time: a part stuck at the eye stalls the
+//! belt (the parts behind it stand, the drive slips) while the motor still runs, for up to the
+//! jam detector's 3 s, and a stalled belt gives no encoder pulses. Until issue 21 the gate was run
+//! by the timer register (source 000's timed sequences), which ticked every cycle the motor
+//! output was on: during a stall it went on counting, opened the gate early for the bad parts
+//! held behind the stuck one, and they went on — 40 of 602 bad parts in ten seeded ten-minute
+//! runs with 119 jams (`tests/plc_conveyor_tracking.rs`). Counted by the encoder, none pass.
+//!
+//! # Power failure
+//! [`Simulator::power_failure`] (the monitor's `powerfail MS`): the executive writes the safe
+//! outputs and freezes, the program's battery-backed memory keeps a [`program::Retained`] — the
+//! tracker's snapshot (the bad parts on their way, the gate's hold), the edges, the counts and
+//! the spool —, the program starts again from power-on with it, and the executive resumes with
+//! `Restart::Inhibit` (the motor stays off until START). The encoder's counter card restarts from
+//! 0 with the power; the first scan takes it as the new reference (the belt cannot move
+//! unpowered). No tracked part is lost: every bad part in flight reaches the gate.
 //!
 //! # The timing model
 //! One cycle every [`PERIOD_MS`] = 50 ms (the 1977 plant's period). In a simulated run the
@@ -44,8 +63,10 @@ pub use plant::{Plant, Tally};
 pub use program::{Conveyor, Report};
 pub use simulator::{REPORTS_KEPT, Sample, Simulator, TRACE_CAP};
 
-/// Input words.
-pub const IW: usize = 1;
+/// Input words: the points (word 0) and the belt encoder's counter (word 1).
+pub const IW: usize = 2;
+/// Millimetres of belt travel per encoder pulse.
+pub const MM_PER_PULSE: u32 = 10;
 /// Output words.
 pub const OW: usize = 1;
 /// Cycle period, ms (the 1977 plant's 50 ms).
@@ -63,6 +84,9 @@ pub mod input {
     pub const BAD: usize = 3;
     /// Jam reset push-button.
     pub const RESET: usize = 4;
+    /// The input word that holds the belt encoder's pulse count (a counter card: 16 bits,
+    /// wrapping), not points.
+    pub const ENCODER_WORD: usize = 1;
 }
 
 /// Output points.

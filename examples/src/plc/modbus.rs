@@ -540,7 +540,7 @@ fn publish(sim: &Simulator, storage: &mut Storage) {
     values.push(clip(u64::from(
         st.load_per_mille(sim.plc.config().period_us),
     ))); // 7
-    values.push(clip(sim.program.timers_waiting() as u64)); // 8
+    values.push(clip(sim.program.tracked() as u64)); // 8
     values.extend(wide(u64::from(t.good_passed))); // 9-10
     values.extend(wide(u64::from(t.bad_rejected))); // 11-12
     values.extend(wide(u64::from(t.bad_passed))); // 13-14

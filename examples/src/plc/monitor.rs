@@ -19,9 +19,11 @@ use crate::cli::{self, Out, Stop};
 pub const RUN_MAX: u64 = 1_000_000;
 /// `cont` runs until a breakpoint, at most this many cycles (one simulated hour).
 pub const CONT_MAX: u64 = 72_000;
+/// The longest power failure `powerfail` takes, ms (one hour).
+pub const POWERFAIL_MAX_MS: u32 = 3_600_000;
 
 /// The monitor's commands: the form (its usage) and what it does, as `help` lists them.
-pub const COMMANDS: [(&str, &str); 14] = [
+pub const COMMANDS: [(&str, &str); 15] = [
     (
         "run N",
         "run N cycles (at most 1000000), stopping at a breakpoint",
@@ -43,6 +45,10 @@ pub const COMMANDS: [(&str, &str); 14] = [
         "force a point (the program and the hardware cannot change it)",
     ),
     ("unforce in|out POINT", "release a forced point"),
+    (
+        "powerfail MS",
+        "power off for MS ms (1-3600000): outputs safe, tracked parts kept",
+    ),
     ("show", "the images, forced points marked"),
     ("spool", "reports waiting in the spool and run"),
     ("stats", "parts, cycle statistics, load"),
@@ -116,6 +122,16 @@ impl Simulator {
                         "no such point: {} (a number 0-15 or a name; help lists them)",
                         cli::excerpt(s)
                     )
+                })
+                .and_then(|p| {
+                    // Input word 1 is the belt encoder's counter, not 16 points.
+                    if (16..32).contains(&p) {
+                        Err(format!(
+                            "no such point: {p} (16-31 would be the belt encoder's counter word; points are 0-15)"
+                        ))
+                    } else {
+                        Ok(p)
+                    }
                 })
         };
         let level = |s: &str| -> Result<bool, String> {
@@ -199,6 +215,28 @@ impl Simulator {
                     self.plc.unforce_output(p)
                 };
                 r.map_err(|e| e.to_string())?;
+            }
+            ["powerfail", ms] => {
+                let ms: u32 = ms
+                    .parse()
+                    .ok()
+                    .filter(|ms| (1..=POWERFAIL_MAX_MS).contains(ms))
+                    .ok_or_else(|| {
+                        format!(
+                            "powerfail takes 1 to {POWERFAIL_MAX_MS} ms, got {}",
+                            cli::excerpt(ms)
+                        )
+                    })?;
+                let tracked = self.program.tracked();
+                self.power_failure(ms)
+                    .map_err(|e| format!("the program did not start again: {e}"))?;
+                let _ = writeln!(
+                    out,
+                    "power off for {} s after cycle {}: outputs safe; {tracked} bad part{} kept in the tracker; START 1 s after the power came back",
+                    cli::number(f64::from(ms) / 1000.0),
+                    self.plc.cycle_count(),
+                    if tracked == 1 { "" } else { "s" },
+                );
             }
             ["show"] => out.push_str(&self.show()),
             ["spool"] => {

@@ -1,13 +1,13 @@
 //! The picture: a timing diagram of chosen signals, one row each (inputs blue, outputs red,
 //! high = on), over a window of cycles that ends a quarter of its width after the reject gate
-//! last opened — the gate is what the program is for, so the bad part, the gate and its timing
-//! are in the picture. Without an opening in the run the window is the last cycles.
+//! last opened — the gate is what the program is for, so the bad part, the gate and the belt
+//! travel between them are in the picture. Without an opening in the run the window is the last cycles.
 
 use std::fmt::Write as _;
 
-use super::program::TRAVEL_CYCLES;
+use super::program::GATE_PULSES;
 use super::simulator::{Sample, Simulator};
-use super::{PERIOD_MS, SIGNALS, input, output};
+use super::{MM_PER_PULSE, PERIOD_MS, SIGNALS, input, output};
 
 /// The window over `trace` as `start..end` indices and, if the gate opened, the index of its
 /// last opening.
@@ -139,7 +139,7 @@ pub fn timing_diagram(
             let (y0, y1) = (bad_row - 18.0, gate_row - 18.0);
             let _ = writeln!(
                 svg,
-                "<line x1=\"{x0:.1}\" y1=\"{y0:.1}\" x2=\"{x1:.1}\" y2=\"{y1:.1}\" stroke=\"#555\" stroke-dasharray=\"4 3\"/>\n<text x=\"{:.1}\" y=\"{:.1}\" font-family=\"sans-serif\" font-size=\"11\" fill=\"#555\" text-anchor=\"{}\">bad part reaches the gate after {TRAVEL_CYCLES} belt cycles ({} s)</text>",
+                "<line x1=\"{x0:.1}\" y1=\"{y0:.1}\" x2=\"{x1:.1}\" y2=\"{y1:.1}\" stroke=\"#555\" stroke-dasharray=\"4 3\"/>\n<text x=\"{:.1}\" y=\"{:.1}\" font-family=\"sans-serif\" font-size=\"11\" fill=\"#555\" text-anchor=\"{}\">bad part reaches the gate after {GATE_PULSES} encoder pulses ({} m of belt)</text>",
                 if x1 > left + plot / 2.0 {
                     x1 - 6.0
                 } else {
@@ -151,7 +151,7 @@ pub fn timing_diagram(
                 } else {
                     "start"
                 },
-                crate::cli::number(f64::from(TRAVEL_CYCLES * PERIOD_MS) / 1000.0)
+                crate::cli::number(f64::from(GATE_PULSES * MM_PER_PULSE) / 1000.0)
             );
         }
     }
@@ -166,20 +166,21 @@ pub fn timing_diagram(
 }
 
 /// The sample where the quality sensor flagged the part the gate opened for at `opening`:
-/// [`TRAVEL_CYCLES`] cycles of running belt earlier (the register ticks only while the motor
-/// runs), give or take the cycles the latch and the edge take.
+/// [`GATE_PULSES`] encoder pulses of belt travel earlier (the tracker counts the belt's
+/// movement, so stops and stalls in between do not count).
 fn flagged_for(trace: &[Sample], opening: usize) -> Option<usize> {
-    let motor = |s: &Sample| s.outputs >> output::MOTOR & 1 == 1;
-    let bad = |s: &Sample| s.inputs >> input::BAD & 1 == 1;
-    let mut belt = 0;
-    let mut at = opening;
-    while belt < TRAVEL_CYCLES && at > 0 {
-        at -= 1;
-        if motor(&trace[at]) {
-            belt += 1;
+    let bad = |k: usize| trace[k].inputs >> input::BAD & 1 == 1;
+    // Walk back summing the belt's travel: the latest rising edge of the flag at least
+    // GATE_PULSES before the opening; the parts ride at least 400 mm (40 pulses) apart, so one
+    // within 20 more is this part's.
+    let mut belt = 0u32;
+    let mut k = opening;
+    while k > 1 && belt < GATE_PULSES + 20 {
+        belt += u32::from(trace[k].encoder.wrapping_sub(trace[k - 1].encoder));
+        k -= 1;
+        if belt >= GATE_PULSES && bad(k) && !bad(k - 1) {
+            return Some(k);
         }
     }
-    (at.saturating_sub(3)..(at + 3).min(opening))
-        .rev()
-        .find(|&k| k > 0 && bad(&trace[k]) && !bad(&trace[k - 1]))
+    None
 }

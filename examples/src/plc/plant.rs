@@ -1,19 +1,27 @@
-//! The plant: a simulated conveyor section (parts arrive, travel while the motor runs, pass the
-//! quality sensor and the gate, now and then one sticks at the eye) and the operator who starts
-//! the belt and clears jams. It is the executive's `Io`: the input word it reads, the output word
-//! it writes, and the clock.
+//! The plant: a simulated conveyor section (parts arrive, ride the belt while the motor runs,
+//! pass the quality sensor and the gate, now and then one sticks at the eye and stalls the belt)
+//! and the operator who starts the belt and clears jams. It is the executive's `Io`: the input
+//! words it reads (the points and the belt encoder's counter), the output word it writes, and the
+//! clock.
+//!
+//! The belt runs at 1 m/s (1 mm a millisecond) while the motor is on and nothing stalls it; a
+//! part's position is the belt travel since it was put on at the quality sensor (mm), the gate's
+//! photo eye covers 2 000–2 150 mm and a part leaves the section at 2 150 mm, into the reject bin
+//! if the gate is open then. A part stuck at the eye, or a stall scheduled with
+//! [`Plant::stall`], stops the belt with every part on it: no part moves and the encoder gives no
+//! pulses, whether or not the motor output is on.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use regler_scan_cycle::Io;
 use serde::Serialize;
 
-use super::{IW, OW, input, output};
+use super::{IW, MM_PER_PULSE, OW, input, output};
 
-/// A part on the belt.
+/// A part on the belt (its position in mm of belt travel from the quality sensor).
 #[derive(Clone, Copy, Debug)]
 struct Part {
-    position_ms: u32,
+    position_mm: u32,
     bad: bool,
     stuck_for_ms: u32,
 }
@@ -37,6 +45,12 @@ pub struct Plant {
     pub tally: Tally,
     press: Vec<(u32, usize, u32)>,
     jam_since_ms: Option<u32>,
+    /// Belt travel, mm: the encoder counts one pulse per [`MM_PER_PULSE`] of it since
+    /// `encoder_from_mm`, where the power last came on.
+    belt_mm: u64,
+    encoder_from_mm: u64,
+    /// Scheduled stalls: from `at_ms` for `for_ms`.
+    stalls: Vec<(u32, u32)>,
 }
 
 /// What happened to the parts.
@@ -54,10 +68,12 @@ pub struct Tally {
     pub jams: u32,
     /// Stuck parts the operator took off the belt.
     pub cleared_by_hand: u32,
+    /// Parts put on the belt.
+    pub arrived: u32,
 }
 
-const GATE_AT_MS: u32 = 2_000;
-const EYE_WIDTH_MS: u32 = 150;
+const GATE_AT_MM: u32 = 2_000;
+const EYE_WIDTH_MM: u32 = 150;
 
 impl Plant {
     /// A plant with the given seed; the operator presses START at 0.5 s (for 200 ms).
@@ -74,7 +90,40 @@ impl Plant {
             tally: Tally::default(),
             press: vec![(500, input::START, 200)],
             jam_since_ms: None,
+            belt_mm: 0,
+            encoder_from_mm: 0,
+            stalls: Vec::new(),
         }
+    }
+
+    /// Stalls the belt at `at_ms` for `for_ms` (something wedged in it, wherever the parts are):
+    /// nothing on it moves and the encoder gives no pulses, whatever the motor output. A stall
+    /// with a part at the eye lasting 3 s is a jam to the program like a stuck part.
+    pub fn stall(&mut self, at_ms: u32, for_ms: u32) {
+        self.stalls.push((at_ms, for_ms));
+    }
+
+    /// Parts on the belt now.
+    #[must_use]
+    pub fn on_belt(&self) -> usize {
+        self.parts.len()
+    }
+
+    /// The belt encoder's counter card: one pulse per [`MM_PER_PULSE`] mm, 16 bits, wrapping.
+    #[must_use]
+    pub fn encoder(&self) -> u16 {
+        (((self.belt_mm - self.encoder_from_mm) / u64::from(MM_PER_PULSE)) & 0xffff) as u16
+    }
+
+    /// The power is off for `ms` (the outputs are the safe ones the executive wrote: the motor
+    /// is off, the belt stands): time passes; when the power comes back the encoder's counter
+    /// card starts again from 0, and the operator presses START 1 s later.
+    pub fn power_cut(&mut self, ms: u32) {
+        self.advance(ms);
+        self.encoder_from_mm = self.belt_mm;
+        self.inputs[input::ENCODER_WORD] = self.encoder();
+        let now = self.now_ms();
+        self.press(now + 1_000, input::START, 200);
     }
 
     /// Presses a push-button at `at_ms` for `for_ms`.
@@ -95,37 +144,47 @@ impl Plant {
             let now = self.now_ms();
             if motor {
                 if now >= self.next_arrival_ms
-                    && self.parts.last().is_none_or(|p| p.position_ms > 400)
+                    && self.parts.last().is_none_or(|p| p.position_mm > 400)
                 {
                     let bad = self.rng.random_bool(0.1);
                     let stuck_for_ms = if self.rng.random_bool(0.02) { 4_000 } else { 0 };
+                    self.tally.arrived += 1;
                     self.parts.push(Part {
-                        position_ms: 0,
+                        position_mm: 0,
                         bad,
                         stuck_for_ms,
                     });
                     self.next_arrival_ms = now + self.rng.random_range(300..1500);
                 }
-                // The part at the eye may stick; the ones behind it wait.
-                let mut blocked = false;
+                // The part at the eye may stick: it stalls the belt, and every part on it
+                // stands (none can be ahead of it: they are 400 mm apart and leave at 2 150).
+                let mut stuck = false;
                 for p in &mut self.parts {
                     let at_eye =
-                        p.position_ms >= GATE_AT_MS && p.position_ms < GATE_AT_MS + EYE_WIDTH_MS;
+                        p.position_mm >= GATE_AT_MM && p.position_mm < GATE_AT_MM + EYE_WIDTH_MM;
                     if at_eye && p.stuck_for_ms > 0 {
                         if p.stuck_for_ms == 4_000 {
                             self.tally.jams += 1;
                         }
                         p.stuck_for_ms -= 1;
-                        blocked = true;
-                    } else if !blocked {
-                        p.position_ms += 1;
+                        stuck = true;
+                    }
+                }
+                let stalled = self
+                    .stalls
+                    .iter()
+                    .any(|&(at, dur)| now > at && now - at <= dur);
+                if !stuck && !stalled {
+                    self.belt_mm += 1;
+                    for p in &mut self.parts {
+                        p.position_mm += 1;
                     }
                 }
             }
             // Parts leave at the gate: into the reject bin if it is open, on otherwise.
             let mut kept = Vec::with_capacity(self.parts.len());
             for p in self.parts.drain(..) {
-                if p.position_ms >= GATE_AT_MS + EYE_WIDTH_MS {
+                if p.position_mm >= GATE_AT_MM + EYE_WIDTH_MM {
                     match (p.bad, gate) {
                         (true, true) => self.tally.bad_rejected += 1,
                         (true, false) => self.tally.bad_passed += 1,
@@ -143,11 +202,11 @@ impl Plant {
         if self
             .parts
             .iter()
-            .any(|p| p.position_ms >= GATE_AT_MS && p.position_ms < GATE_AT_MS + EYE_WIDTH_MS)
+            .any(|p| p.position_mm >= GATE_AT_MM && p.position_mm < GATE_AT_MM + EYE_WIDTH_MM)
         {
             word |= 1 << input::PART;
         }
-        if self.parts.iter().any(|p| p.bad && p.position_ms < 100) {
+        if self.parts.iter().any(|p| p.bad && p.position_mm < 100) {
             word |= 1 << input::BAD;
         }
         for &(at, point, dur) in &self.press {
@@ -155,7 +214,7 @@ impl Plant {
                 word |= 1 << point;
             }
         }
-        self.inputs = [word];
+        self.inputs = [word, self.encoder()];
         // Two seconds after the jam lamp comes on, the operator takes the stuck part off the
         // belt, presses RESET, then START.
         if self.outputs[0] & (1 << output::JAM) == 0 {
@@ -163,7 +222,7 @@ impl Plant {
         } else if now.saturating_sub(*self.jam_since_ms.get_or_insert(now)) >= 2_000 {
             let before = self.parts.len();
             self.parts.retain(|p| {
-                !(p.position_ms >= GATE_AT_MS && p.position_ms < GATE_AT_MS + EYE_WIDTH_MS)
+                !(p.position_mm >= GATE_AT_MM && p.position_mm < GATE_AT_MM + EYE_WIDTH_MM)
             });
             self.tally.cleared_by_hand += u32::try_from(before - self.parts.len()).unwrap_or(0);
             self.press.push((now + 100, input::RESET, 200));

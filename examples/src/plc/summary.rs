@@ -35,6 +35,8 @@ pub struct Summary {
     pub load_per_mille: u32,
     /// Reports run in the reserve.
     pub reports_run: u64,
+    /// Power failures survived.
+    pub power_failures: u32,
     /// Reports waiting in the spool.
     pub spool_waiting: usize,
     /// Inputs forced at the end.
@@ -74,6 +76,7 @@ impl Summary {
             stats: st,
             load_per_mille: st.load_per_mille(sim.plc.config().period_us),
             reports_run: sim.reports_run,
+            power_failures: sim.power_failures,
             spool_waiting: sim.program.spool.len(),
             forced_inputs: forced(sim.plc.forced_inputs().iter(), true),
             forced_outputs: forced(sim.plc.forced_outputs().iter(), false),
