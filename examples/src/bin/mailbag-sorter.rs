@@ -38,11 +38,12 @@ struct Args {
     /// seeded traffic out.
     #[arg(long, value_name = "FILE")]
     script: Option<std::path::PathBuf>,
-    /// Whole plant: a fault at a simulated time, repeatable: misread@T:READER:RATE,
-    /// reader-fails@T:READER, noise@T:PANEL:BIT_ERROR_RATE, stuck@T:INPUT:0|1[:SECONDS],
-    /// chatter@T:INPUT[:SECONDS], power@T:SECONDS, hang@T[:SECONDS], pulses@T:DOCK:RATE[:SECONDS];
-    /// T is HH:MM[:SS] (hours past 23 for later days), READER R1–R12, PANEL P1–P3/A/B/central,
-    /// INPUT a name (full-E3, waiting-D1, present-R5, pulse-1, ref-end-2) or 0–543, DOCK 1–3.
+    /// Whole plant: a fault at a simulated time, repeatable: `misread@T:READER:RATE`,
+    /// `reader-fails@T:READER`, `noise@T:PANEL:BIT_ERROR_RATE`, `stuck@T:INPUT:0|1[:SECONDS]`,
+    /// `chatter@T:INPUT[:SECONDS]`, `power@T:SECONDS`, `hang@T[:SECONDS]`,
+    /// `pulses@T:DOCK:RATE[:SECONDS]`; T is `HH:MM[:SS]` (hours past 23 for later days), READER
+    /// R1–R12, PANEL P1–P3, A, B or central, INPUT a name (full-E3, waiting-D1, present-R5,
+    /// pulse-1, ref-end-2) or 0–543, DOCK 1–3.
     #[arg(long, value_name = "KIND@TIME[:ARGS]", value_parser = parse_fault)]
     fault: Vec<mailbag::plant::traffic::Fault>,
     /// Whole plant: trolleys (1 to 4095).

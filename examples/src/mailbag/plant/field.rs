@@ -3,6 +3,11 @@
 //! a place; the loop calls [`Field::advance`] every 10 ms of plant time and the executive reads
 //! and writes it through [`Io`] every 50 ms.
 
+#![allow(
+    clippy::needless_range_loop,
+    reason = "an index names a reader, lane, desk or exit across several arrays"
+)]
+
 use std::cmp::Reverse;
 use std::collections::{BTreeMap, BinaryHeap, VecDeque};
 
@@ -524,7 +529,7 @@ impl Field {
         if counted {
             capture[io::CHAIN_WORD] |= 1 << d;
         }
-        if p % chain::LOOP_PULSES == 0 {
+        if p.is_multiple_of(chain::LOOP_PULSES) {
             capture[io::CHAIN_WORD] |= 1 << (4 + d);
         }
         if p % chain::LOOP_PULSES == dock.dia {

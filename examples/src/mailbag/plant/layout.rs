@@ -2,6 +2,11 @@
 //! destinations, the travel times, and which input and output bit is which. Everything the
 //! field (`field.rs`) and the control program (`control.rs`) agree on is here.
 
+#![allow(
+    clippy::needless_range_loop,
+    reason = "an index names a reader, lane, desk or exit across several arrays"
+)]
+
 use serde::Serialize;
 
 use super::operator::{BUFFER_LANES, EMPTYING_STATIONS, LOADING_STATIONS, lane_name, station_name};

@@ -1,6 +1,11 @@
 //! What a whole-plant run found: the JSON report (the top-level sack figures are the voting
 //! run's), the map's data, and the text summary.
 
+#![allow(
+    clippy::needless_range_loop,
+    reason = "an index names a reader, lane, desk or exit across several arrays"
+)]
+
 use std::fmt::Write as _;
 
 use serde::Serialize;
@@ -259,7 +264,6 @@ pub fn map(r: &RunResult) -> MapData {
             trolleys: c.loaded[p],
         });
     }
-    let mut lane_out = [0u64; BUFFER_LANES as usize];
     for (reader, exits) in c.passed.iter().enumerate() {
         for e in 0..EXITS[reader] {
             let to = match next(reader, e) {
@@ -290,21 +294,18 @@ pub fn map(r: &RunResult) -> MapData {
             });
         }
     }
-    for (l, out) in lane_out.iter_mut().enumerate() {
-        *out = c.lane_out[l];
+    for (l, &out) in c.lane_out.iter().enumerate() {
         edges.push(MapEdge {
             from: lanes[l],
             to: readers[R_EMPTYING],
-            trolleys: *out,
+            trolleys: out,
         });
     }
-    let into_stations: u64 = c.passed[R_EMPTYING].iter().take(7).sum();
-    let onto_chains: u64 = (0..DOCKS).map(|d| c.passed[R_CHAIN + d][0]).sum();
-    for &s in &stations {
+    for (s, &node) in stations.iter().enumerate() {
         edges.push(MapEdge {
-            from: s,
+            from: node,
             to: ret,
-            trolleys: 0,
+            trolleys: c.passed[R_EMPTYING][s],
         });
     }
     for (d, &dock) in docks.iter().enumerate() {
@@ -320,7 +321,6 @@ pub fn map(r: &RunResult) -> MapData {
         to: ret,
         trolleys: manual_in,
     });
-    let _ = (into_stations, onto_chains);
     for (place, outcome) in &c.ended {
         match (place, outcome) {
             (Place::Station(s), Outcome::Misdelivered) => {

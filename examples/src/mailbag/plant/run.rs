@@ -13,8 +13,8 @@ use regler_scan_cycle::{CycleConfig, DateTime, Executive, Restart};
 use super::Config;
 use super::control::{Control, DockTracker, IW, OW, Reading, schedule_for};
 use super::field::{Field, FieldCounts};
-use super::layout::{BINS_PER_DOCK, DESKS, DOCKS, Dest, chain, io};
-use super::operator::{Command, Desks, PanelId, PanelTotals};
+use super::layout::{BINS_PER_DOCK, DESKS, DOCKS, chain, io};
+use super::operator::{Desks, PanelId, PanelTotals};
 use super::traffic::{Fault, FaultKind, Keyed, SackArrival};
 
 /// What one run (one way of reading) found.
@@ -320,7 +320,7 @@ pub fn run_one(
         }
         exec.check_watchdog(&mut field);
 
-        if wall_ms % 50 == 0 {
+        if wall_ms.is_multiple_of(50) {
             if let Some(last) = last_cycle_ms {
                 worst_cycle_us = worst_cycle_us.max(((wall_ms - last) * 1000) as u32);
             }
@@ -345,7 +345,7 @@ pub fn run_one(
             }
         }
 
-        if wall_ms % 60_000 == 0 {
+        if wall_ms.is_multiple_of(60_000) {
             let loaded: u64 = field.counts.loaded.iter().sum();
             let in_plant = field.sacks_in_plant();
             let c = &field.counts;
@@ -379,8 +379,6 @@ pub fn run_one(
             }
         })
         .collect();
-    let _ = Dest::Lane(0);
-    let _ = Command::LampTest;
     Ok(RunResult {
         reading,
         in_plant: field.sacks_in_plant(),
