@@ -229,7 +229,7 @@ proptest! {
 fn voting_misdelivers_at_least_100_times_fewer_sacks_than_parity_alone() {
     let config = Config {
         seed: 21,
-        hours: 24.0,
+        hours: 48.0,
         traffic: 3.0,
         trolleys: 1500,
         ..Config::default()
