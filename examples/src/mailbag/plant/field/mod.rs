@@ -1,7 +1,7 @@
 //! The field: trolleys, rails, readers' cams, switches, lanes, stations and dock chains, as
 //! the control program's I/O sees them. Event-driven: a trolley costs work only when it reaches
 //! a place; the loop calls [`Field::advance`] every 10 ms of plant time and the executive reads
-//! and writes it through [`Io`] every 50 ms.
+//! and writes it through [`Io`](regler_scan_cycle::Io) (`field/inputs.rs`) every 50 ms.
 
 #![allow(
     clippy::needless_range_loop,
@@ -13,7 +13,6 @@ use std::collections::{BTreeMap, BinaryHeap, VecDeque};
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use regler_scan_cycle::Io;
 use regler_trolley_id::{TrolleyId, encode};
 
 use super::layout::{
@@ -55,6 +54,9 @@ struct Sack {
     /// panels A and B had them then.
     station_ok: bool,
 }
+
+mod dock_chain;
+mod inputs;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 enum Event {
@@ -519,65 +521,6 @@ impl Field {
         }
     }
 
-    /// One real pulse of dock `d`'s chain.
-    fn pulse(&mut self, d: usize, capture: &mut [u16; io::IN_WORDS]) {
-        let missed = self.faults.missed_pulse[d];
-        let counted = !(missed > 0.0 && self.rng.random_bool(missed.min(1.0)));
-        let dock = &mut self.docks[d];
-        dock.pulses += 1;
-        let p = dock.pulses;
-        if counted {
-            capture[io::CHAIN_WORD] |= 1 << d;
-        }
-        if p.is_multiple_of(chain::LOOP_PULSES) {
-            capture[io::CHAIN_WORD] |= 1 << (4 + d);
-        }
-        if p % chain::LOOP_PULSES == dock.dia {
-            capture[io::CHAIN_WORD] |= 1 << (8 + d);
-        }
-        // Sacks fall where a tipper is set as their trolley passes its bin.
-        let mut drops = Vec::new();
-        for j in 0..BINS_PER_DOCK {
-            let b = d * BINS_PER_DOCK + j;
-            if self.outputs[io::tipper(b) / 16] >> (io::tipper(b) % 16) & 1 == 1 {
-                let dock = &self.docks[d];
-                if let Some(hooked) = p.checked_sub(dock.bin_at[j]) {
-                    if let Some(&t) = dock.on_chain.get(&hooked) {
-                        drops.push((t, b as u8));
-                    }
-                }
-            }
-        }
-        for (t, b) in drops {
-            if let Some(sack) = self.sacks[usize::from(t)] {
-                let right = sack.right == Dest::Bin(b);
-                if right {
-                    self.counts.delivered_sorted += 1;
-                }
-                let outcome = if right {
-                    Outcome::Delivered
-                } else {
-                    Outcome::Misdelivered
-                };
-                self.end(t, Place::Bin(b), outcome);
-            }
-        }
-        // Trolleys past the last bin leave the chain: a sack still on goes to the manual station.
-        while let Some((&hooked, &t)) = self.docks[d].on_chain.first_key_value() {
-            if p.saturating_sub(hooked) < chain::END_PULSES {
-                break;
-            }
-            self.docks[d].on_chain.pop_first();
-            self.at(
-                self.now_ms + timing::MANUAL_MS,
-                Event::AtManual {
-                    trolley: t,
-                    from: READERS,
-                },
-            );
-        }
-    }
-
     fn lane_gates(&mut self) {
         for l in 0..usize::from(BUFFER_LANES) {
             if self.output(io::lane_gate(l)) && !self.gate_busy[l] && !self.lanes[l].is_empty() {
@@ -613,58 +556,5 @@ impl Field {
             }
         }
         w
-    }
-}
-
-impl Io<{ io::IN_WORDS }, { io::OUT_WORDS }> for Field {
-    fn read_inputs(&mut self, raw: &mut [u16; io::IN_WORDS]) {
-        *raw = [0; io::IN_WORDS];
-        for r in 0..READERS {
-            if let Some((t, swinging)) = self.occupant[r] {
-                raw[r] = self.cams(r, t, swinging) | 1 << io::PRESENT_BIT;
-            }
-        }
-        let (lanes, stations) = self.fills();
-        for l in 0..usize::from(BUFFER_LANES) {
-            raw[io::LANE_FULL_WORD] |= u16::from(lanes[l] >= capacity::LANE) << l;
-            raw[io::LANE_WAITING_WORD] |= u16::from(lanes[l] > 0) << l;
-        }
-        for (s, &n) in stations.iter().enumerate() {
-            raw[io::STATION_FULL_WORD] |= u16::from(n >= capacity::STATION) << s;
-        }
-        for (w, l) in raw.iter_mut().zip(self.latched.iter_mut()) {
-            *w |= *l;
-            *l = 0;
-        }
-        self.chatter_phase = !self.chatter_phase;
-        for &point in &self.faults.chatter {
-            let bit = 1 << (point % 16);
-            if self.chatter_phase {
-                raw[point / 16] |= bit;
-            } else {
-                raw[point / 16] &= !bit;
-            }
-        }
-        for &(point, on) in &self.faults.stuck {
-            let bit = 1 << (point % 16);
-            if on {
-                raw[point / 16] |= bit;
-            } else {
-                raw[point / 16] &= !bit;
-            }
-        }
-    }
-
-    fn write_outputs(&mut self, outputs: &[u16; io::OUT_WORDS]) {
-        self.outputs = *outputs;
-        self.lane_gates();
-    }
-
-    fn now_us(&mut self) -> u32 {
-        self.clock_us.wrapping_add(self.cost.get()) as u32
-    }
-
-    fn kick_watchdog(&mut self) {
-        self.kicks += 1;
     }
 }

@@ -16,25 +16,25 @@ use std::collections::VecDeque;
 use std::rc::Rc;
 
 use regler_chain_tracker::{
-    DistanceTable, Measurement, SOURCE_HOLD_PULSES, StretchConfig, StretchMeter, TipperEvent,
-    Tracker,
+    DistanceTable, SOURCE_HOLD_PULSES, StretchConfig, StretchMeter, Tracker,
 };
 use regler_scan_cycle::{
     DateTime, MinuteTable, Scan, Spool, Start, StepChain, TimerId, TimerQueue, Weekdays,
 };
-use regler_trolley_id::{
-    AlarmLimits, NoRead, Passage, ReaderHealth, Registry, Route, Strategy, TrolleyId, Verdict,
-    Voter, decode,
-};
+use regler_trolley_id::{AlarmLimits, ReaderHealth, Registry, Strategy, Verdict, Voter};
 
-use super::layout::{
-    BINS_PER_DOCK, DESKS, DOCKS, Dest, EXITS, R_CHAIN, R_EMPTYING, R_MAIN, READER_NAMES, READERS,
-    chain, exit_toward, io,
-};
+use super::layout::{BINS_PER_DOCK, DESKS, DOCKS, Dest, R_MAIN, READER_NAMES, READERS, chain, io};
 use super::operator::{
     BUFFER_LANES, Command, DeskLive, EntryVerdict, Live, POST_TYPES, PanelId, SCHEDULES,
 };
 use super::traffic::bin_for;
+
+mod calendar;
+mod conveyors;
+mod readers;
+
+use self::calendar::STATISTICS;
+pub use self::calendar::{SCHEDULE_STARTS, schedule_for};
 
 /// Input and output words, for short types.
 pub const IW: usize = io::IN_WORDS;
@@ -479,229 +479,6 @@ impl Control {
         }
     }
 
-    /// The passage's verdict as this program reads: the first scan, or the vote.
-    fn verdict(&mut self, r: usize, first: Option<u16>) -> Passage {
-        let voted = self.voters[r].finish();
-        let passage = match self.reading {
-            Reading::Voting => voted,
-            Reading::ParityOnly => {
-                let raw = first.unwrap_or(0);
-                let verdict = match decode(raw) {
-                    Ok(id) => Verdict::Identified(id),
-                    Err(e) => Verdict::NoRead(NoRead::Undecodable(e)),
-                };
-                Passage {
-                    verdict,
-                    samples: 1,
-                    ..voted
-                }
-            }
-        };
-        self.passages += 1;
-        if self.health[r].record(&voted).is_some() {
-            let on = self.health[r].alarm();
-            if on {
-                self.alarms_raised += 1;
-            }
-            let text = format!(
-                "{} reader {} alarm {}",
-                self.stamp(),
-                READER_NAMES[r],
-                if on { "raised" } else { "cleared" }
-            );
-            self.print(text);
-        }
-        passage
-    }
-
-    fn supervise(&mut self, id: TrolleyId, next: usize) {
-        let t = id.get();
-        if let Some(old) = self.supervision[usize::from(t)].take() {
-            self.timers.remove(old);
-        }
-        if let Ok(timer) = self
-            .timers
-            .insert(SUPERVISE_TICKS, Timer::Supervise { trolley: t, next })
-        {
-            self.supervision[usize::from(t)] = Some(timer);
-        }
-    }
-
-    /// A reader on the rails: samples while the trolley is present, judges at the passage's
-    /// end and sets the switch toward the destination (or the reject gate).
-    fn reader(&mut self, r: usize, scan: &mut Scan<'_, IW, OW>) {
-        let present = scan.inputs.get(io::present(r));
-        if present {
-            self.spend(cost::SAMPLE_US);
-            let cams = scan.inputs.word(r).unwrap_or(0) & io::CAMS;
-            if !self.in_passage[r] {
-                self.in_passage[r] = true;
-                self.first[r] = Some(cams);
-            }
-            self.voters[r].sample(cams);
-            return;
-        }
-        if !self.in_passage[r] {
-            return;
-        }
-        self.in_passage[r] = false;
-        self.spend(cost::VERDICT_US);
-        let first = self.first[r].take();
-        let passage = self.verdict(r, first);
-        if let Some(id) = passage.verdict.trolley() {
-            if let Some(timer) = self.supervision[usize::from(id.get())].take() {
-                self.timers.remove(timer);
-            }
-        }
-        for e in 0..EXITS[r] {
-            let _ = scan.outputs.set(io::switch(r, e), false);
-        }
-        let _ = scan.outputs.set(io::reject(r), false);
-        let route = self.registry.route(&passage.verdict, |&dest| match dest {
-            Dest::Lane(_) => r == R_EMPTYING || exit_toward(r, dest).is_some(),
-            Dest::Bin(b) => {
-                if r >= R_CHAIN {
-                    usize::from(b) / BINS_PER_DOCK == r - R_CHAIN
-                } else {
-                    exit_toward(r, dest).is_some()
-                }
-            }
-        });
-        match route {
-            Route::Deliver {
-                trolley,
-                destination,
-            } => {
-                if r >= R_CHAIN {
-                    let Dest::Bin(b) = destination else { return };
-                    let d = r - R_CHAIN;
-                    self.registry.release(trolley);
-                    if self.trackers[d]
-                        .enter(trolley.get(), usize::from(b) % BINS_PER_DOCK)
-                        .is_err()
-                    {
-                        self.reject(r, scan);
-                    }
-                    return;
-                }
-                let exit = if r == R_EMPTYING {
-                    let Dest::Lane(l) = destination else { return };
-                    self.registry.release(trolley);
-                    self.station_for(usize::from(l))
-                } else {
-                    exit_toward(r, destination)
-                };
-                match exit {
-                    Some(e) => {
-                        let _ = scan.outputs.set(io::switch(r, e), true);
-                        if let Some(super::layout::Next::Reader(n)) = super::layout::next(r, e) {
-                            self.supervise(trolley, n);
-                        }
-                    }
-                    None => self.reject(r, scan),
-                }
-            }
-            Route::Reject(_) => self.reject(r, scan),
-        }
-    }
-
-    fn reject(&mut self, r: usize, scan: &mut Scan<'_, IW, OW>) {
-        self.rejected_by[r] += 1;
-        let _ = scan.outputs.set(io::reject(r), true);
-    }
-
-    /// The emptying station for the next trolley of lane `l`: its stations in turn, a
-    /// portion of [`PORTION`] trolleys each.
-    fn station_for(&mut self, l: usize) -> Option<usize> {
-        let stations = self.emptying[l];
-        let n = stations.count_ones();
-        if n == 0 {
-            return None;
-        }
-        let k = (self.through_r9[l] / PORTION) % n;
-        self.through_r9[l] += 1;
-        (0..7).filter(|s| stations >> s & 1 == 1).nth(k as usize)
-    }
-
-    /// Dock chains: pulses through the tracker and the stretch meter, tippers set and reset.
-    fn chains(scan: &mut Scan<'_, IW, OW>, c: &mut Control) {
-        for d in 0..DOCKS {
-            if scan.inputs.get(io::chain_pulse(d)) {
-                c.spend(cost::PULSE_US);
-                c.meters[d].pulse();
-                let mut events = Vec::new();
-                c.trackers[d].pulse(|e| events.push(e));
-                for e in events {
-                    c.spend(cost::TIPPER_US);
-                    let (tipper, on) = match e {
-                        TipperEvent::Set { tipper, .. } => (tipper, true),
-                        TipperEvent::Reset { tipper } => (tipper, false),
-                    };
-                    let _ = scan.outputs.set(io::tipper(d * BINS_PER_DOCK + tipper), on);
-                }
-            }
-            if scan.inputs.get(io::reference_start(d)) {
-                c.meters[d].start();
-            }
-            if scan.inputs.get(io::reference_end(d)) {
-                match c.meters[d].end() {
-                    Some(Measurement::Accepted { dia })
-                        if c.trackers[d].recalibrate(dia).is_ok() =>
-                    {
-                        c.recalibrations += 1;
-                    }
-                    Some(Measurement::Implausible { dia }) => {
-                        let text = format!(
-                            "{} dock {} chain measured {dia} pulses: implausible",
-                            c.stamp(),
-                            d + 1
-                        );
-                        c.print(text);
-                    }
-                    _ => {}
-                }
-            }
-        }
-    }
-
-    fn lane_exits(scan: &mut Scan<'_, IW, OW>, c: &mut Control) {
-        let exits = scan.inputs.word(io::LANE_EXIT_WORD).unwrap_or(0);
-        if let Some((lane, left, timer)) = c.portion {
-            if exits >> lane & 1 == 1 {
-                let left = left.saturating_sub(1);
-                c.portion = Some((lane, left, timer));
-            }
-        }
-    }
-
-    /// Buffer lanes: one lane at a time lets a portion of [`PORTION`] trolleys go toward its
-    /// emptying stations; lanes are taken in turn.
-    fn lanes(scan: &mut Scan<'_, IW, OW>, c: &mut Control) {
-        c.spend(cost::LANES_US);
-        let waiting = scan.inputs.word(io::LANE_WAITING_WORD).unwrap_or(0);
-        let full_stations = scan.inputs.word(io::STATION_FULL_WORD).unwrap_or(0);
-        if let Some((lane, left, timer)) = c.portion {
-            if left > 0 && waiting >> lane & 1 == 1 {
-                return;
-            }
-            c.timers.remove(timer);
-            let _ = scan.outputs.set(io::lane_gate(lane), false);
-            c.portion = None;
-        }
-        for k in 0..usize::from(BUFFER_LANES) {
-            let l = (c.next_lane + k) % usize::from(BUFFER_LANES);
-            let stations = c.emptying[l];
-            if waiting >> l & 1 == 1 && stations != 0 && stations & !full_stations as u8 != 0 {
-                if let Ok(timer) = c.timers.insert(40 * 20, Timer::PortionTimeout) {
-                    c.portion = Some((l, PORTION, timer));
-                    let _ = scan.outputs.set(io::lane_gate(l), true);
-                }
-                c.next_lane = l + 1;
-                break;
-            }
-        }
-    }
-
     fn timers_tick(scan: &mut Scan<'_, IW, OW>, c: &mut Control) {
         c.spend(cost::TIMERS_US);
         let mut due = Vec::new();
@@ -775,37 +552,4 @@ fn reader_step<const R: usize>(scan: &mut Scan<'_, IW, OW>, c: &mut Control) {
 
 fn chain_test(scan: &Scan<'_, IW, OW>) -> bool {
     scan.inputs.word(io::CHAIN_WORD) != Some(0)
-}
-
-/// The minute table's statistics line.
-const STATISTICS: u8 = 255;
-
-/// The calendar's schedule starts: (hour, schedule, days).
-pub const SCHEDULE_STARTS: [(u8, u8, Weekdays); 7] = [
-    (0, 0, Weekdays::WORKDAYS),
-    (5, 1, Weekdays::WORKDAYS),
-    (10, 2, Weekdays::WORKDAYS),
-    (15, 3, Weekdays::WORKDAYS),
-    (20, 4, Weekdays::WORKDAYS),
-    (0, 5, Weekdays::WEEKEND),
-    (12, 4, Weekdays::WEEKEND),
-];
-
-/// The schedule the calendar has in force at `t`: the latest start at or before it, looking
-/// back up to a week.
-#[must_use]
-pub fn schedule_for(t: &DateTime) -> u8 {
-    const WEEK: u32 = 7 * 24;
-    let now = (u32::from(t.weekday()).clamp(1, 7) - 1) * 24 + u32::from(t.hour());
-    for back in 0..=WEEK {
-        let h = (now + WEEK - back) % WEEK;
-        let (day, hour) = ((h / 24) as u8 + 1, (h % 24) as u8);
-        if let Some(&(_, s, _)) = SCHEDULE_STARTS
-            .iter()
-            .find(|(sh, _, days)| *sh == hour && days.contains(day))
-        {
-            return s;
-        }
-    }
-    0
 }
