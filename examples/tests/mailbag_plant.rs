@@ -304,3 +304,38 @@ fn a_power_failure_loses_nothing() {
     let loaded: u64 = r.counts.loaded.iter().sum();
     assert_eq!(r.counts.delivered + r.counts.rejected + r.in_plant, loaded);
 }
+
+/// A script that replaces the seeded traffic: three sacks keyed, then a schedule override
+/// under which the fourth sack's postcode has no bin (refused, never loaded). All three reach
+/// their right destination within half an hour.
+#[test]
+fn a_script_replaces_the_seeded_traffic() {
+    let script =
+        std::env::temp_dir().join(format!("regler-plant-ok-{}.script", std::process::id()));
+    std::fs::write(
+        &script,
+        "replace\n# three sacks\n00:01 P1 type 3\n00:02 P2 postcode 20000\n00:03:30 P3 type 12\n\
+         00:04 central schedule 2\n00:06 P1 postcode 20000\n",
+    )
+    .unwrap();
+    let out = sorter(&[
+        "--hours",
+        "0.5",
+        "--quiet",
+        "--json",
+        "--script",
+        script.to_str().unwrap(),
+    ]);
+    std::fs::remove_file(&script).ok();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    for run in v["runs"].as_array().unwrap() {
+        assert_eq!(run["sacks_loaded"], 3, "{run}");
+        assert_eq!(run["sacks_delivered"], 3, "{run}");
+        assert_eq!(run["entries_refused"], 1, "{run}");
+    }
+}

@@ -35,3 +35,24 @@ pub fn schedule_for(t: &DateTime) -> u8 {
     }
     0
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_schedule_in_force_follows_the_starts_by_time_and_weekday() {
+        // 1977-03-07 is a Monday.
+        let at = |day, hour, minute| {
+            schedule_for(&DateTime::new(1977, 3, day, hour, minute, 0).unwrap())
+        };
+        assert_eq!(at(7, 0, 30), 0);
+        assert_eq!(at(7, 4, 59), 0);
+        assert_eq!(at(7, 5, 0), 1);
+        assert_eq!(at(7, 14, 59), 2);
+        assert_eq!(at(11, 23, 0), 4); // Friday night
+        assert_eq!(at(12, 1, 0), 5); // Saturday
+        assert_eq!(at(13, 13, 0), 4); // Sunday afternoon
+        assert_eq!(at(14, 0, 0), 0); // Monday again
+    }
+}
