@@ -132,6 +132,8 @@ pub struct Report {
     pub teletype: Vec<String>,
     /// The voting run's map.
     pub map: MapData,
+    /// The parity-only run's map.
+    pub map_parity_only: MapData,
 }
 
 fn per_million(r: &RunResult) -> f64 {
@@ -212,6 +214,7 @@ impl Report {
                 .cloned()
                 .collect(),
             map: map(&voting),
+            map_parity_only: map(&parity),
             runs: [p, v],
         }
     }

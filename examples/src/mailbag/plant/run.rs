@@ -277,7 +277,6 @@ pub fn run_one(
                 Operator::Idle => {
                     if field.desk_ready(p) && !field.release_open(p) {
                         if let Some(sack) = desk_sacks[p].pop_front() {
-                            control.accepted[p] = None;
                             desks.type_in(PanelId::Desk(p as u8), sack.entry);
                             operators[p] = Operator::Typed {
                                 at_ms: field.now_ms,

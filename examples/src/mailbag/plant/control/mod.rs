@@ -175,7 +175,8 @@ pub struct Control {
     /// Commands received from the panels, for the next cycle.
     pub commands: VecDeque<(PanelId, Command)>,
     entries: [Option<Entry>; DESKS],
-    /// The destination of the entry accepted at each desk (the field loads it).
+    /// The destination of the entry accepted at each desk, from the keyed entry alone (not from
+    /// the number read): the sack's right destination, which the field loads with it.
     pub accepted: [Option<Dest>; DESKS],
     /// What the displays show.
     pub live: Live,
@@ -413,6 +414,7 @@ impl Control {
         self.live.desks[p].last_entry = shown;
         match dest {
             Some(dest) if self.entries[p].is_none() => {
+                self.accepted[p] = None;
                 self.entries[p] = Some(Entry {
                     dest,
                     scans: 0,
