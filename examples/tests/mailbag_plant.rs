@@ -6,8 +6,8 @@ mod common;
 use std::process::Command;
 
 use proptest::prelude::*;
+use regler_examples::mailbag::plant::faults::{Fault, FaultKind};
 use regler_examples::mailbag::plant::operator::{Immediate, PanelId};
-use regler_examples::mailbag::plant::traffic::{Fault, FaultKind};
 use regler_examples::mailbag::plant::{self, Config, Reading, run::run_one};
 use serde_json::Value;
 

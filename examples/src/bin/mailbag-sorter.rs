@@ -45,7 +45,7 @@ struct Args {
     /// R1–R12, PANEL P1–P3, A, B or central, INPUT a name (full-E3, waiting-D1, present-R5,
     /// pulse-1, ref-end-2) or 0–543, DOCK 1–3.
     #[arg(long, value_name = "KIND@TIME[:ARGS]", value_parser = parse_fault)]
-    fault: Vec<mailbag::plant::traffic::Fault>,
+    fault: Vec<mailbag::plant::faults::Fault>,
     /// Whole plant: trolleys (1 to 4095).
     #[arg(long, default_value_t = 3000, value_parser = cli::whole(1u16, 4095u16))]
     trolleys: u16,
@@ -140,8 +140,8 @@ impl Args {
     }
 }
 
-fn parse_fault(s: &str) -> Result<mailbag::plant::traffic::Fault, String> {
-    mailbag::plant::traffic::parse_fault(s)
+fn parse_fault(s: &str) -> Result<mailbag::plant::faults::Fault, String> {
+    mailbag::plant::faults::parse_fault(s)
 }
 
 /// Options of the dock comparison alone.

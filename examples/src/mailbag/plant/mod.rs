@@ -61,7 +61,7 @@
 //! time), voting none in the runs measured.
 //!
 //! # Faults and tallies
-//! `--fault` ([`traffic::FAULT_SYNTAX`]); every sack loaded is delivered, misdelivered, rejected
+//! `--fault` ([`faults::FAULT_SYNTAX`]); every sack loaded is delivered, misdelivered, rejected
 //! or still in the plant, counted place by place and checked every simulated minute.
 //!
 //! # CPU load
@@ -70,12 +70,13 @@
 //!
 //! # Files, as the data flows
 //! `layout.rs` (readers, exits, destinations, timing, the I/O map); `traffic.rs` (the seeded
-//! sacks and operators, `--script`, `--fault`); `field/` (the plant: trolleys and events,
+//! sacks and operators, `--script`); `faults.rs` (`--fault`); `field/` (the plant: trolleys and events,
 //! `dock_chain.rs` pulse by pulse, `inputs.rs` the executive's I/O); `control/` (the program:
 //! desks and commands, `readers.rs`, `conveyors.rs` for chains and lanes, `calendar.rs`);
 //! `run.rs` (the 10 ms loop, faults, teletype, tallies); `report.rs` (JSON, map, summary).
 
 pub mod control;
+pub mod faults;
 pub mod field;
 pub mod layout;
 pub mod map_data;
@@ -87,9 +88,10 @@ pub mod traffic;
 use regler_scan_cycle::DateTime;
 
 pub use self::control::Reading;
+use self::faults::Fault;
 pub use self::report::{Report, summary_text};
 pub use self::run::RunResult;
-use self::traffic::{Fault, Keyed, SackArrival, Script};
+use self::traffic::{Keyed, SackArrival, Script};
 
 /// A whole-plant run's parameters.
 #[derive(Clone, Debug)]

@@ -12,10 +12,11 @@ use regler_scan_cycle::{CycleConfig, DateTime, Executive, Restart};
 
 use super::Config;
 use super::control::{Control, DockTracker, IW, OW, Reading, schedule_for};
+use super::faults::{Fault, FaultKind};
 use super::field::{Field, FieldCounts};
 use super::layout::{BINS_PER_DOCK, DESKS, DOCKS, chain, io};
 use super::operator::{Desks, PanelId, PanelTotals};
-use super::traffic::{Fault, FaultKind, Keyed, SackArrival};
+use super::traffic::{Keyed, SackArrival};
 
 /// What one run (one way of reading) found.
 #[derive(Clone, Debug)]
