@@ -1,6 +1,7 @@
-//! `mailbag-sorter`: the loading docks of the 1977 Malmö Ban mailbag sorter, simulated over
-//! years on `regler-trolley-id` and `regler-chain-tracker`, with and without stretch correction
-//! and read voting. See `regler_examples::mailbag` for the plant model.
+//! `mailbag-sorter`: the whole 1977 Malmö Ban mailbag-sorting plant (`regler_examples::mailbag::plant`),
+//! or with `--docks-only` its loading docks simulated over years on `regler-trolley-id` and
+//! `regler-chain-tracker`, with and without stretch correction and read voting
+//! (`regler_examples::mailbag`).
 
 use std::process::ExitCode;
 
@@ -17,10 +18,11 @@ enum StrategyArg {
     Consecutive,
 }
 
-/// Simulates the dock chains of the 1977 Malmö Ban mailbag sorter for several years: trolleys
-/// read at the chain start, tracked by chain pulses to their bins, the chain stretching about
-/// 2 m a year. Each run compares four controllers: parity only or voting over several scans,
-/// with or without stretch correction (DA = SA·DIA/SIA).
+/// Simulates the whole 1977 Malmö Ban mailbag-sorting plant for --hours: loading desks, code
+/// readers and switches, buffer lanes, emptying stations, dock chains and the control program on
+/// a 50 ms scan, run twice on the same traffic (parity-only and voting readers), with faults on
+/// demand. With --docks-only: the dock chains alone over several years, four controllers (parity
+/// only or voting, with or without stretch correction DA = SA·DIA/SIA).
 #[derive(Debug, Parser)]
 #[command(name = "mailbag-sorter", version, allow_negative_numbers = true)]
 struct Args {
