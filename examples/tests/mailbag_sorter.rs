@@ -1,4 +1,5 @@
-//! End-to-end: the `mailbag-sorter` binary and its simulation, in short seeded runs.
+//! End-to-end: the `mailbag-sorter` binary's dock comparison (`--docks-only`) and its
+//! simulation, in short seeded runs. The whole plant: `mailbag_plant.rs`.
 
 mod common;
 
@@ -9,6 +10,7 @@ use serde_json::Value;
 
 fn sorter(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_mailbag-sorter"))
+        .arg("--docks-only")
         .args(args)
         .output()
         .unwrap()
@@ -273,7 +275,7 @@ fn a_closed_pipe_ends_quietly() {
         for close in [common::Close::AtOnce, common::Close::AfterALine] {
             common::closes_quietly(
                 env!("CARGO_BIN_EXE_mailbag-sorter"),
-                &[&["--years", "0.05", "-q"], mode].concat(),
+                &[&["--docks-only", "--years", "0.05", "-q"], mode].concat(),
                 b"",
                 close,
             );

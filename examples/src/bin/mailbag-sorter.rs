@@ -1,6 +1,7 @@
-//! `mailbag-sorter`: the loading docks of the 1977 Malmö Ban mailbag sorter, simulated over
-//! years on `regler-trolley-id` and `regler-chain-tracker`, with and without stretch correction
-//! and read voting. See `regler_examples::mailbag` for the plant model.
+//! `mailbag-sorter`: the whole 1977 Malmö Ban mailbag-sorting plant (`regler_examples::mailbag::plant`),
+//! or with `--docks-only` its loading docks simulated over years on `regler-trolley-id` and
+//! `regler-chain-tracker`, with and without stretch correction and read voting
+//! (`regler_examples::mailbag`).
 
 use std::process::ExitCode;
 
@@ -17,13 +18,42 @@ enum StrategyArg {
     Consecutive,
 }
 
-/// Simulates the dock chains of the 1977 Malmö Ban mailbag sorter for several years: trolleys
-/// read at the chain start, tracked by chain pulses to their bins, the chain stretching about
-/// 2 m a year. Each run compares four controllers: parity only or voting over several scans,
-/// with or without stretch correction (DA = SA·DIA/SIA).
+/// Simulates the whole 1977 Malmö Ban mailbag-sorting plant for --hours: loading desks, code
+/// readers and switches, buffer lanes, emptying stations, dock chains and the control program on
+/// a 50 ms scan, run twice on the same traffic (parity-only and voting readers), with faults on
+/// demand. With --docks-only: the dock chains alone over several years, four controllers (parity
+/// only or voting, with or without stretch correction DA = SA·DIA/SIA).
 #[derive(Debug, Parser)]
 #[command(name = "mailbag-sorter", version, allow_negative_numbers = true)]
 struct Args {
+    /// Run today's multi-year comparison of the dock chains alone (the options below from
+    /// --years to --reader-alarm-per-mille apply only here) instead of the whole plant.
+    #[arg(long)]
+    docks_only: bool,
+    /// Whole plant: simulated hours (0.01 to 1000).
+    #[arg(long, default_value_t = 24.0, allow_hyphen_values = true,
+          value_parser = cli::real(0.01, 1000.0))]
+    hours: f64,
+    /// Whole plant: a script of operators' entries, lines `HH:MM[:SS] PANEL COMMAND ARGS`
+    /// (`P1 type 3`, `P2 postcode 20211`, `central assign 3 E2`, `central schedule 2|calendar`,
+    /// `A emptying D1 A1,A2`, `B lamptest`), `#` comments, and `replace` alone to leave the
+    /// seeded traffic out.
+    #[arg(long, value_name = "FILE")]
+    script: Option<std::path::PathBuf>,
+    /// Whole plant: a fault at a simulated time, repeatable: `misread@T:READER:RATE`,
+    /// `reader-fails@T:READER`, `noise@T:PANEL:BIT_ERROR_RATE`, `stuck@T:INPUT:0|1[:SECONDS]`,
+    /// `chatter@T:INPUT[:SECONDS]`, `power@T:SECONDS`, `hang@T[:SECONDS]`,
+    /// `pulses@T:DOCK:RATE[:SECONDS]`; T is `HH:MM[:SS]` (hours past 23 for later days), READER
+    /// R1–R12, PANEL P1–P3, A, B or central, INPUT a name (full-E3, waiting-D1, present-R5,
+    /// pulse-1, ref-end-2) or 0–543, DOCK 1–3.
+    #[arg(long, value_name = "KIND@TIME[:ARGS]", value_parser = parse_fault)]
+    fault: Vec<mailbag::plant::faults::Fault>,
+    /// Whole plant: trolleys (1 to 4095).
+    #[arg(long, default_value_t = 3000, value_parser = cli::whole(1u16, 4095u16))]
+    trolleys: u16,
+    /// Whole plant: traffic, times the usual day's (0.1 to 10).
+    #[arg(long, default_value_t = 1.0, value_parser = cli::real(0.1, 10.0))]
+    traffic: f64,
     /// Simulated years (0.01 to 50).
     #[arg(long, default_value_t = 5.0, allow_hyphen_values = true,
           value_parser = cli::real(YEARS.0, YEARS.1))]
@@ -112,8 +142,102 @@ impl Args {
     }
 }
 
+fn parse_fault(s: &str) -> Result<mailbag::plant::faults::Fault, String> {
+    mailbag::plant::faults::parse_fault(s)
+}
+
+/// Options of the dock comparison alone.
+const DOCK_OPTIONS: [&str; 13] = [
+    "years",
+    "trolleys_per_year",
+    "docks",
+    "bins",
+    "chain_m",
+    "stretch_m_per_year",
+    "misread_rate",
+    "reader_spread",
+    "readings",
+    "strategy",
+    "vote_k",
+    "glitch_rate",
+    "reader_alarm_per_mille",
+];
+/// Options of the whole plant alone.
+const PLANT_OPTIONS: [&str; 5] = ["hours", "script", "fault", "trolleys", "traffic"];
+
 fn main() -> ExitCode {
-    cli::finish(Mailbag::NAME, run(&Args::parse()))
+    use clap::{CommandFactory, FromArgMatches, parser::ValueSource};
+    let matches = Args::command().get_matches();
+    let args = match Args::from_arg_matches(&matches) {
+        Ok(a) => a,
+        Err(e) => e.exit(),
+    };
+    let given = |id: &str| matches.value_source(id) == Some(ValueSource::CommandLine);
+    let wrong = if args.docks_only {
+        PLANT_OPTIONS
+            .iter()
+            .find(|id| given(id))
+            .map(|id| (id, "applies to the whole plant, not with --docks-only"))
+    } else {
+        DOCK_OPTIONS
+            .iter()
+            .find(|id| given(id))
+            .map(|id| (id, "applies only with --docks-only"))
+    };
+    if let Some((id, why)) = wrong {
+        let option = format!("--{}", id.replace('_', "-"));
+        let _ = Args::command()
+            .error(
+                clap::error::ErrorKind::ArgumentConflict,
+                format!("{option} {why}"),
+            )
+            .print();
+        return ExitCode::from(2);
+    }
+    let result = if args.docks_only {
+        run(&args)
+    } else {
+        run_plant(&args)
+    };
+    cli::finish(Mailbag::NAME, result)
+}
+
+fn run_plant(args: &Args) -> Result<(), Stop> {
+    use mailbag::plant::{self, operator::Immediate};
+    let script = match &args.script {
+        None => None,
+        Some(path) => {
+            let text = std::fs::read_to_string(path).map_err(|e| {
+                cli::bad(
+                    "--script",
+                    format!("{}: {}", path.display(), cli::io_message(&e)),
+                )
+            })?;
+            Some(
+                plant::traffic::parse_script(&text)
+                    .map_err(|e| cli::bad("--script", format!("{}: {e}", path.display())))?,
+            )
+        }
+    };
+    let config = plant::Config {
+        seed: args.common.seed,
+        hours: args.hours,
+        trolleys: args.trolleys,
+        traffic: args.traffic,
+        faults: args.fault.clone(),
+        script,
+        ..plant::Config::default()
+    };
+    let bar = args
+        .common
+        .progress(2 * config.minutes(), "simulating the plant", "minutes");
+    let report = plant::run(&config, Immediate::default, &|m| bar.inc(m)).map_err(Stop::Error)?;
+    bar.finish_and_clear();
+    if args.common.json {
+        cli::print(&serde_json::to_string_pretty(&report)?)
+    } else {
+        cli::print(&plant::summary_text(&report))
+    }
 }
 
 fn run(args: &Args) -> Result<(), Stop> {
