@@ -233,10 +233,29 @@ fn run_plant(args: &Args) -> Result<(), Stop> {
         .progress(2 * config.minutes(), "simulating the plant", "minutes");
     let report = plant::run(&config, Immediate::default, &|m| bar.inc(m)).map_err(Stop::Error)?;
     bar.finish_and_clear();
+    let picture = args.common.picture();
+    if let Some(path) = picture {
+        let title = format!(
+            "The 1977 mailbag plant, {} h, seed {}",
+            cli::number(report.simulated_hours),
+            report.seed
+        );
+        cli::write_picture(
+            path,
+            plant::map::draw_runs(&report.map, &report.map_parity_only, &title),
+        )?;
+    }
     if args.common.json {
         cli::print(&serde_json::to_string_pretty(&report)?)
     } else {
-        cli::print(&plant::summary_text(&report))
+        let mut text = plant::summary_text(&report);
+        if let Some(path) = picture {
+            text.push_str(&format!(
+                "\nThe plant map (trolleys per hour on every rail, where sacks went astray), both runs: {}\n",
+                path.display()
+            ));
+        }
+        cli::print(&text)
     }
 }
 
