@@ -4,3 +4,4 @@
 
 pub mod map_data;
 pub mod operator;
+pub mod panels;
