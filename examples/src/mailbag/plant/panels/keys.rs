@@ -356,14 +356,19 @@ impl Keyboard {
     /// What the panel shows of the entry.
     #[must_use]
     pub fn display(&self) -> EntryDisplay {
+        // The entry as keyed (first field, a blank and the second field), right-aligned in six
+        // positions: filled from the right.
         let mut positions = [BLANK; 6];
-        let mut shown: Vec<u8> = self.fields[0].keyed().to_vec();
+        let mut slots = positions.iter_mut().rev();
         if self.second {
-            shown.push(BLANK);
-            shown.extend_from_slice(self.fields[1].keyed());
+            for (&d, slot) in self.fields[1].keyed().iter().rev().zip(&mut slots) {
+                *slot = d;
+            }
+            slots.next(); // the blank between the fields
         }
-        let take = shown.len().min(6);
-        positions[6 - take..].copy_from_slice(&shown[shown.len() - take..]);
+        for (&d, slot) in self.fields[0].keyed().iter().rev().zip(&mut slots) {
+            *slot = d;
+        }
         EntryDisplay {
             positions,
             keying: self.keying,

@@ -199,6 +199,12 @@ impl Side {
 
 /// `value` right-aligned over the digit registers `out` (two positions each), saturating.
 fn number(value: u32, out: &mut [u8]) {
+    if let [one] = out {
+        // The common case, two positions: kept cheap (it runs every 50 ms for every lane).
+        let v = value.min(99) as u8;
+        *one = pair(if v >= 10 { v / 10 } else { BLANK }, v % 10);
+        return;
+    }
     let positions = out.len() * 2;
     let max = 10u32.saturating_pow(u32::try_from(positions).unwrap_or(9)) - 1;
     let mut rest = value.min(max);

@@ -86,11 +86,15 @@ pub struct Link<const R: usize> {
     bits: u32,
     to_panel: Option<Noise>,
     to_host: Option<Noise>,
-    /// The registers the host sent in the current sequence, as they went out.
+    /// Bytes go through the watched path: noise on the line, a fault to inject or a check
+    /// pending. A clean link skips the framing and the bookkeeping below.
+    watched: bool,
+    /// The registers the host sent in the current sequence, as they went out (watched only).
     sent: [u8; R],
-    /// Sequence position of the last byte sent: 0 the reset byte, `k` register `k − 1`.
-    position: usize,
-    /// Reset bytes sent.
+    /// Sequence position of the last byte sent: 0 the reset byte, `k` register `k − 1`;
+    /// `None` until the watched path has seen a reset byte.
+    position: Option<usize>,
+    /// Reset bytes sent on the watched path.
     resets: u64,
     /// Check the display when the reset byte with this number has arrived clean.
     check_at: Option<u64>,
@@ -116,8 +120,9 @@ impl<const R: usize> Link<R> {
             bits: 0,
             to_panel: None,
             to_host: None,
+            watched: false,
             sent: [0; R],
-            position: 0,
+            position: None,
             resets: 0,
             check_at: None,
             inject: None,
@@ -144,12 +149,24 @@ impl<const R: usize> Link<R> {
         let noise = |seed| Noise::new(rate, seed).ok().filter(|_| rate > 0.0);
         self.to_panel = noise(seed);
         self.to_host = noise(seed ^ 0x5A5A_5A5A_5A5A_5A5A);
+        self.watch();
+    }
+
+    /// Takes the watched path if anything needs it; entering it, the sequence position is
+    /// unknown until the next reset byte.
+    fn watch(&mut self) {
+        let watched = self.to_panel.is_some() || self.inject.is_some() || self.check_at.is_some();
+        if watched && !self.watched {
+            self.position = None;
+        }
+        self.watched = watched;
     }
 
     /// The next byte sent at sequence position `position` (0: a reset byte, `k`: register
     /// `k − 1`) has the frame bits in `mask` flipped (bit 0 is the start bit).
     pub fn inject(&mut self, position: usize, mask: u16) {
         self.inject = Some((position, mask & 0x7FF));
+        self.watch();
     }
 
     /// The registers the computer holds for the panel.
@@ -251,21 +268,30 @@ impl<const R: usize> Link<R> {
             return;
         };
         self.stats.bytes_sent += 1;
+        if self.watched {
+            self.watched_byte(byte);
+        } else {
+            self.panel.receive(Ok(byte));
+        }
+    }
+
+    /// A byte on the watched path: its position, the noise, an injected fault, the check.
+    fn watched_byte(&mut self, byte: u8) {
         if byte == RESET {
             self.resets += 1;
-            self.position = 0;
-        } else {
-            if let Some(slot) = self.sent.get_mut(self.position) {
+            self.position = Some(0);
+        } else if let Some(position) = self.position {
+            if let Some(slot) = self.sent.get_mut(position) {
                 *slot = byte;
             }
-            self.position += 1;
+            self.position = Some(position + 1);
         }
         let mut mask = self
             .to_panel
             .as_mut()
             .map_or(0, |n| n.corrupt(0, BITS_PER_BYTE));
         if let Some((at, flip)) = self.inject {
-            if at == self.position {
+            if Some(at) == self.position {
                 mask ^= flip;
                 self.inject = None;
             }
@@ -275,16 +301,18 @@ impl<const R: usize> Link<R> {
             if byte == RESET && self.check_at == Some(self.resets) {
                 self.check();
             }
-            return;
+        } else {
+            self.stats.bytes_corrupted += 1;
+            if self.check_at.is_some() {
+                self.stats.checks_postponed += 1;
+            }
+            // The next whole sequence is opened by the next reset byte and closed by the one
+            // after.
+            self.check_at = Some(self.resets + 2);
+            self.panel
+                .receive(Framing::PANEL.decode(Framing::PANEL.encode(byte) ^ mask));
         }
-        self.stats.bytes_corrupted += 1;
-        if self.check_at.is_some() {
-            self.stats.checks_postponed += 1;
-        }
-        // The next whole sequence is opened by the next reset byte and closed by the one after.
-        self.check_at = Some(self.resets + 2);
-        self.panel
-            .receive(Framing::PANEL.decode(Framing::PANEL.encode(byte) ^ mask));
+        self.watch();
     }
 
     /// The next whole sequence after a corrupted byte has arrived: count registers still wrong.

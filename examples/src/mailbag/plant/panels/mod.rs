@@ -141,6 +141,9 @@ pub struct Panels {
     keyboards: [Keyboard; 6],
     typists: [Typist; 6],
     lamp_test_until_ms: [u64; 6],
+    /// What each panel's registers were last filled from (its entry and lamp test); with the
+    /// live lists unchanged, a panel whose entry and lamp test did not change is not refilled.
+    filled_from: [Option<(EntryDisplay, bool)>; 6],
     rng: ChaCha8Rng,
     seed: u64,
     now_ms: u64,
@@ -161,6 +164,7 @@ impl Panels {
             keyboards: PanelId::ALL.map(Keyboard::new),
             typists: Default::default(),
             lamp_test_until_ms: [0; 6],
+            filled_from: [None; 6],
             rng: ChaCha8Rng::seed_from_u64(seed),
             seed,
             now_ms: 0,
@@ -232,11 +236,17 @@ impl Panels {
         }
     }
 
-    /// Fills `panel`'s registers from the live lists, its keyboard and its lamp test.
-    fn fill(&mut self, panel: PanelId) {
+    /// Fills `panel`'s registers from the live lists, its keyboard and its lamp test, unless
+    /// none of them changed since the last fill (`live_changed` says for the lists).
+    fn fill(&mut self, panel: PanelId, live_changed: bool) {
         let i = panel.index();
         let entry: EntryDisplay = self.keyboards[i].display();
         let lamps = self.now_ms < self.lamp_test_until_ms[i];
+        let from = Some((entry, lamps));
+        if !live_changed && self.filled_from[i] == from {
+            return;
+        }
+        self.filled_from[i] = from;
         let live = &self.live;
         match panel {
             PanelId::Desk(d) => {
@@ -313,9 +323,12 @@ impl Desks for Panels {
     }
 
     fn refresh(&mut self, live: &Live) {
-        self.live.clone_from(live);
+        let live_changed = self.live != *live;
+        if live_changed {
+            self.live.clone_from(live);
+        }
         for panel in PanelId::ALL {
-            self.fill(panel);
+            self.fill(panel, live_changed);
         }
     }
 
