@@ -72,14 +72,14 @@ fn busy_live(seed: u64) -> Live {
     let mut live = Live {
         minute_of_day: (seed % 1440) as u16,
         schedule: (seed % 6) as u8,
-        schedule_override: seed % 2 == 0,
+        schedule_override: seed.is_multiple_of(2),
         reader_alarms: (seed as u32).rotate_left(7) | 1,
         faults: (seed % 300) as u8,
         ..Live::default()
     };
     for (k, desk) in live.desks.iter_mut().enumerate() {
         *desk = DeskLive {
-            trolley_ready: (s + k) % 2 == 0,
+            trolley_ready: (s + k).is_multiple_of(2),
             verdict: [
                 EntryVerdict::None,
                 EntryVerdict::Accepted,
@@ -261,7 +261,7 @@ fn noisy_shift(rate: f64, minutes: u64, seed: u64) -> (Driver, Vec<(PanelId, Com
                 typed.push((panel, command));
             }
         }
-        if d.tick % 6_000 == 0 {
+        if d.tick.is_multiple_of(6_000) {
             d.live = busy_live(d.tick / 6_000 + seed);
         }
         d.step();
@@ -442,7 +442,7 @@ fn measure_a_simulated_day() {
             .unwrap_or(24);
         let day = hours * 3_600 * 100;
         while d.tick < day {
-            if d.tick % 6_000 == 0 {
+            if d.tick.is_multiple_of(6_000) {
                 d.panels.type_in(PanelId::Desk(0), Command::PostType(3));
                 d.panels.type_in(
                     PanelId::Central,
