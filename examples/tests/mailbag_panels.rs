@@ -171,6 +171,43 @@ fn a_wrong_value_that_passes_the_parity_lasts_one_sequence() {
     );
 }
 
+/// Any two flipped bits in one frame, at every byte position of one panel of each type: only
+/// the register whose frame took both flips can show a value the computer did not send (two
+/// flips can keep the parity), and one whole sequence later every register is right again.
+#[test]
+fn two_flips_in_one_frame_are_right_again_one_sequence_later() {
+    for panel in [PanelId::Desk(0), PanelId::A, PanelId::Central] {
+        for position in 0..=panel.registers() {
+            for first in 0..11 {
+                for second in first + 1..11 {
+                    let mut d = Driver::new(position as u64);
+                    d.run(30);
+                    d.panels
+                        .inject(panel, position, (1 << first) | (1 << second));
+                    let mut ticks = 0;
+                    while d.panels.link_stats(panel).checks == 0 {
+                        d.step();
+                        ticks += 1;
+                        assert!(
+                            ticks < 100,
+                            "{panel:?} {position} {first} {second}: no check"
+                        );
+                        let (shown, sent) = (d.panels.display(panel), d.panels.registers(panel));
+                        for (j, (a, b)) in shown.iter().zip(sent).enumerate() {
+                            assert!(
+                                a == b || j + 1 == position,
+                                "{panel:?} position {position} bits {first} {second}: register {j}"
+                            );
+                        }
+                    }
+                    assert_eq!(d.panels.display(panel), d.panels.registers(panel));
+                    assert_eq!(d.panels.totals().displays_wrong_after_next_sequence, 0);
+                }
+            }
+        }
+    }
+}
+
 /// A command valid at `panel`.
 fn valid_command(panel: PanelId) -> BoxedStrategy<Command> {
     let lamp = Just(Command::LampTest);

@@ -195,6 +195,30 @@ impl Panels {
         self.links.get(panel).stats()
     }
 
+    /// The six links' counters added up (what [`Desks::totals`] reports and more: key bytes,
+    /// sequences shown and dropped, checks and postponed checks, keys lost, stuck MOT lines).
+    #[must_use]
+    pub fn link_totals(&self) -> LinkStats {
+        let mut sum = LinkStats::default();
+        for panel in PanelId::ALL {
+            let s = self.links.get(panel).stats();
+            sum.bytes_sent += s.bytes_sent;
+            sum.bytes_corrupted += s.bytes_corrupted;
+            sum.key_bytes_sent += s.key_bytes_sent;
+            sum.key_bytes_corrupted += s.key_bytes_corrupted;
+            sum.errors_detected += s.errors_detected;
+            sum.sequences_shown += s.sequences_shown;
+            sum.sequences_dropped += s.sequences_dropped;
+            sum.checks += s.checks;
+            sum.checks_postponed += s.checks_postponed;
+            sum.displays_wrong_after_next_sequence += s.displays_wrong_after_next_sequence;
+            sum.keys_taken += s.keys_taken;
+            sum.keys_lost += s.keys_lost;
+            sum.mot_stuck += s.mot_stuck;
+        }
+        sum
+    }
+
     /// A fault on demand: the next byte the computer sends `panel` at sequence position
     /// `position` (0 the reset byte, `k` register `k − 1`) has the frame bits in `mask` flipped
     /// (bit 0 the start bit, 1–8 the data, 9 the parity, 10 the stop bit).
@@ -231,7 +255,7 @@ impl Panels {
                 self.typists[i].keys.pop_front();
                 self.keys_pressed += 1;
                 let pace = self.pace();
-                self.typists[i].next_ms = self.now_ms + pace;
+                self.typists[i].next_ms = self.now_ms.saturating_add(pace);
             }
         }
     }
@@ -278,7 +302,7 @@ impl Desks for Panels {
         let i = panel.index();
         if self.typists[i].keys.is_empty() {
             let pace = self.pace();
-            self.typists[i].next_ms = self.now_ms + pace;
+            self.typists[i].next_ms = self.now_ms.saturating_add(pace);
         }
         let mut keys = Vec::new();
         keys_for(command, &mut keys);
@@ -312,7 +336,7 @@ impl Desks for Panels {
                 Outcome::Refused => self.entries_refused += 1,
                 Outcome::Command(command) => {
                     if command == Command::LampTest {
-                        self.lamp_test_until_ms[i] = now_ms + LAMP_TEST_MS;
+                        self.lamp_test_until_ms[i] = now_ms.saturating_add(LAMP_TEST_MS);
                     }
                     self.commands += 1;
                     received(panel, command);
@@ -352,13 +376,11 @@ impl Desks for Panels {
             entries_refused: self.entries_refused,
             ..PanelTotals::default()
         };
-        for panel in PanelId::ALL {
-            let s = self.links.get(panel).stats();
-            totals.bytes_sent += s.bytes_sent;
-            totals.bytes_corrupted += s.bytes_corrupted;
-            totals.errors_detected += s.errors_detected;
-            totals.displays_wrong_after_next_sequence += s.displays_wrong_after_next_sequence;
-        }
+        let links = self.link_totals();
+        totals.bytes_sent = links.bytes_sent;
+        totals.bytes_corrupted = links.bytes_corrupted;
+        totals.errors_detected = links.errors_detected;
+        totals.displays_wrong_after_next_sequence = links.displays_wrong_after_next_sequence;
         totals
     }
 }
