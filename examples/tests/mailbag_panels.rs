@@ -312,6 +312,15 @@ fn under_noise_no_command_arrives_that_was_not_typed_and_the_displays_come_back(
         "the noise must bite: {totals:?}"
     );
     assert!(totals.errors_detected > 1_000);
+    let links = d.panels.link_totals();
+    assert!(
+        links.key_bytes_corrupted > 0,
+        "the keys' direction is noisy too"
+    );
+    assert!(
+        links.checks > 100 && links.sequences_dropped > 1_000,
+        "{links:?}"
+    );
     assert_eq!(totals.displays_wrong_after_next_sequence, 0, "{totals:?}");
     for panel in PanelId::ALL {
         let got = per_panel(&d.got, panel);
