@@ -555,3 +555,77 @@ fn measure_commands_under_noise() {
         );
     }
 }
+
+/// The MOT line stuck high (a key the computer waits for and never gets: it gives up, and the
+/// entry is spoiled) or stuck low (keys wait in the panel): the displays are still refreshed, no
+/// command arrives that was not typed, and once the line works again the keys go through.
+#[test]
+fn a_stuck_mot_line_neither_freezes_the_displays_nor_makes_commands() {
+    let mut d = Driver::new(13);
+    d.run(30);
+    let high = [PanelId::Desk(0), PanelId::Central];
+    for panel in high {
+        d.panels.stick_mot(panel, Some(true));
+    }
+    d.panels.stick_mot(PanelId::A, Some(false));
+    let mut typed = Vec::new();
+    let mut runner = proptest::test_runner::TestRunner::deterministic();
+    let shown = |d: &Driver| -> Vec<u64> {
+        PanelId::ALL
+            .iter()
+            .map(|&p| d.panels.link_stats(p).sequences_shown)
+            .collect()
+    };
+    let mut two_seconds_ago = shown(&d);
+    let mut a_second_ago = shown(&d);
+    for second in 0..30u64 {
+        if second % 3 == 0 {
+            for panel in [PanelId::Desk(0), PanelId::A, PanelId::Central] {
+                let command = valid_command(panel)
+                    .new_tree(&mut runner)
+                    .unwrap()
+                    .current();
+                d.panels.type_in(panel, command);
+                typed.push((panel, command));
+            }
+        }
+        d.live.minute_of_day = second as u16;
+        d.run(100);
+        // Every panel showed new sequences in every two seconds (a stuck MOT costs at most a
+        // key time-out and a MOT time-out, 1.1 s, between sequences).
+        let now = shown(&d);
+        for ((panel, then), now) in PanelId::ALL.iter().zip(&two_seconds_ago).zip(&now) {
+            assert!(now > then, "{panel:?} froze before second {second}");
+        }
+        two_seconds_ago = std::mem::replace(&mut a_second_ago, now);
+    }
+    assert!(
+        per_panel(&d.got, PanelId::A).is_empty(),
+        "A's keys cannot go with MOT low"
+    );
+    for panel in PanelId::ALL {
+        d.panels.stick_mot(panel, None);
+    }
+    // Afterwards: the keys waiting at A go through, and fresh entries everywhere.
+    let after = [
+        (PanelId::Desk(0), Command::PostType(7)),
+        (PanelId::Central, Command::Schedule(Some(2))),
+    ];
+    for (panel, command) in after {
+        d.panels.type_in(panel, command);
+        typed.push((panel, command));
+    }
+    d.run_until_idle(60_000);
+    for panel in PanelId::ALL {
+        let got = per_panel(&d.got, panel);
+        assert_eq!(untyped(&got, &per_panel(&typed, panel)), 0, "{panel:?}");
+    }
+    assert_eq!(per_panel(&d.got, PanelId::A), per_panel(&typed, PanelId::A));
+    assert_eq!(
+        per_panel(&d.got, PanelId::Central).last(),
+        Some(&Command::Schedule(Some(2)))
+    );
+    let links = d.panels.link_totals();
+    assert!(links.keys_lost > 0 && links.mot_stuck > 0, "{links:?}");
+    assert!(d.every_display_is_the_computers());
+}

@@ -116,6 +116,9 @@ pub struct Link<const R: usize> {
     check_at: Option<u64>,
     /// Fault injection: flip these frame bits of the byte sent at this sequence position.
     inject: Option<(usize, u16)>,
+    /// Fault injection: the MOT line as the computer reads it, stuck at this level.
+    mot_stuck_at: Option<bool>,
+
     stats: LinkStats,
 }
 
@@ -142,6 +145,7 @@ impl<const R: usize> Link<R> {
             resets: 0,
             check_at: None,
             inject: None,
+            mot_stuck_at: None,
             stats: LinkStats {
                 bytes_sent: 0,
                 bytes_corrupted: 0,
@@ -183,6 +187,11 @@ impl<const R: usize> Link<R> {
     pub fn inject(&mut self, position: usize, mask: u16) {
         self.inject = Some((position, mask & 0x7FF));
         self.watch();
+    }
+
+    /// The MOT line as the computer reads it is stuck at `level` (`None`: the panel's MOT).
+    pub fn stick_mot(&mut self, level: Option<bool>) {
+        self.mot_stuck_at = level;
     }
 
     /// The registers the computer holds for the panel.
@@ -240,7 +249,8 @@ impl<const R: usize> Link<R> {
             self.bits -= BITS_PER_BYTE;
             self.byte_time();
         }
-        if let Some(event) = self.host.poll_mot(self.panel.mot()) {
+        let mot = self.mot_stuck_at.unwrap_or(self.panel.mot());
+        if let Some(event) = self.host.poll_mot(mot) {
             self.event(event, on);
         }
         if let Some(key) = self.panel.set_san(self.host.san()) {

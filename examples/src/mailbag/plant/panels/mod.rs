@@ -58,6 +58,8 @@ trait AnyLink {
     fn stats(&self) -> LinkStats;
     fn set_noise(&mut self, rate: f64, seed: u64);
     fn inject(&mut self, position: usize, mask: u16);
+    fn stick_mot(&mut self, level: Option<bool>);
+
     fn registers(&self) -> &[u8];
     fn display(&self) -> &[u8];
 }
@@ -80,6 +82,9 @@ impl<const R: usize> AnyLink for Link<R> {
     }
     fn inject(&mut self, position: usize, mask: u16) {
         Link::inject(self, position, mask);
+    }
+    fn stick_mot(&mut self, level: Option<bool>) {
+        Link::stick_mot(self, level);
     }
     fn registers(&self) -> &[u8] {
         Link::registers(self)
@@ -224,6 +229,12 @@ impl Panels {
     /// (bit 0 the start bit, 1–8 the data, 9 the parity, 10 the stop bit).
     pub fn inject(&mut self, panel: PanelId, position: usize, mask: u16) {
         self.links.get_mut(panel).inject(position, mask);
+    }
+
+    /// A fault on demand: the MOT line of `panel` as the computer reads it is stuck at `level`
+    /// (`Some(true)` high, `Some(false)` low) or works again (`None`).
+    pub fn stick_mot(&mut self, panel: PanelId, level: Option<bool>) {
+        self.links.get_mut(panel).stick_mot(level);
     }
 
     /// No operator has a key still to press or waiting in a panel.
