@@ -629,3 +629,16 @@ fn a_stuck_mot_line_neither_freezes_the_displays_nor_makes_commands() {
     assert!(links.keys_lost > 0 && links.mot_stuck > 0, "{links:?}");
     assert!(d.every_display_is_the_computers());
 }
+
+/// The same seed gives the same run: the operators' pace and the noise are seeded.
+#[test]
+fn a_run_is_repeatable_from_its_seed() {
+    let (a, typed_a) = noisy_shift(3e-3, 2, 8);
+    let (b, typed_b) = noisy_shift(3e-3, 2, 8);
+    assert_eq!(typed_a, typed_b);
+    assert_eq!(a.got, b.got);
+    assert_eq!(a.panels.totals(), b.panels.totals());
+    assert_eq!(a.panels.link_totals(), b.panels.link_totals());
+    let (c, _) = noisy_shift(3e-3, 2, 9);
+    assert_ne!(a.panels.link_totals(), c.panels.link_totals());
+}

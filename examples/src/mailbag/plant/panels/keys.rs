@@ -29,7 +29,10 @@
 //! function the panel does not have (a postcode at P3 or at panel A, a lane assignment at a
 //! desk…). A key byte that is no key is refused at once. A key the link lost (the computer gave
 //! up waiting for two equal bytes: [`Keyboard::key_lost`]) spoils the entry it fell in, so a lost
-//! digit can never make another valid command (post type `12` keyed, `1` taken).
+//! digit can never make another valid command (post type `12` keyed, `1` taken). The computer
+//! cannot tell a lost key from a MOT line that rose with no key behind it (a stuck or glitching
+//! line): both spoil the entry, so after such a fault the next entry at a desk (digits ENTER,
+//! no function key to start it afresh) is refused once — refused, never taken wrong.
 
 use super::super::operator::{BUFFER_LANES, Command, POST_TYPES, PanelId, SCHEDULES};
 use super::layout::{BLANK, EntryDisplay, Side};
