@@ -9,7 +9,7 @@
 //! - **Displays** ([`layout`]): every 50 ms [`Desks::refresh`] fills each panel's registers from
 //!   the live lists, the entry its keyboard holds, and the lamp test; the layouts and the
 //!   register encoding are documented there.
-//! - **Keys** ([`keys`]): [`Desks::type_in`] queues the keys an operator presses for a command;
+//! - **Keys** ([`keys`], [`keyboard`]): [`Desks::type_in`] queues the keys an operator presses for a command;
 //!   the operator presses them one at a time at a human pace (200–400 ms apart, seeded); each goes
 //!   over the MOT/SÄN handshake; the computer's keyboard for the panel turns what it took into
 //!   commands, handed to the control program by [`Desks::tick_10ms`], or refuses the entry.
@@ -20,6 +20,7 @@
 //! The driver loop is the control program's: `tick_10ms` every 10 ms, `refresh` every fifth
 //! tick, `type_in` whenever an operator has something to key.
 
+pub mod keyboard;
 pub mod keys;
 pub mod layout;
 pub mod link;
@@ -30,7 +31,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use regler_panel_link::panel::HostEvent;
 
-use self::keys::{Keyboard, Outcome, keys_for};
+use self::keyboard::{Keyboard, Outcome};
+use self::keys::keys_for;
 use self::layout::{EntryDisplay, Side};
 use self::link::{Link, LinkStats};
 use super::operator::{Command, Desks, Live, PanelId, PanelTotals};
