@@ -642,3 +642,64 @@ fn a_run_is_repeatable_from_its_seed() {
     let (c, _) = noisy_shift(3e-3, 2, 9);
     assert_ne!(a.panels.link_totals(), c.panels.link_totals());
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(32))]
+
+    /// Panels restart at any moment while their operators key (the computer is not told): the
+    /// operator, seeing it, clears and keys the interrupted command again. Every command
+    /// typed arrives exactly once, in order, and nothing else; the displays come back.
+    #[test]
+    fn a_panel_restarting_mid_entry_never_splices_two_entries(
+        typed in typed_commands(),
+        restarts in proptest::collection::vec((0u64..1_500, proptest::sample::select(PanelId::ALL.to_vec())), 1..6),
+        seed in any::<u64>(),
+    ) {
+        let mut d = Driver::new(seed);
+        d.run(30);
+        for &(panel, command) in &typed {
+            d.panels.type_in(panel, command);
+        }
+        let mut restarts = restarts;
+        restarts.sort_unstable();
+        let start = d.tick;
+        for (at, panel) in restarts {
+            while d.tick < start + at {
+                d.step();
+            }
+            d.panels.restart_panel(panel);
+        }
+        d.run_until_idle(40_000);
+        for panel in PanelId::ALL {
+            prop_assert_eq!(per_panel(&d.got, panel), per_panel(&typed, panel), "{:?}", panel);
+        }
+        prop_assert!(d.every_display_is_the_computers());
+    }
+}
+
+/// The case that splices: the computer took the `1` of post type `12`, the panel restarts
+/// holding the `2`. Keying `2 ENTER` on would make post type 2, keying `12` again without CLEAR
+/// post type 112 (refused): the operator clears and keys `12` again, and 12 arrives, once.
+#[test]
+fn a_restart_between_two_digits_is_cleared_and_keyed_again() {
+    for seed in 0..20 {
+        let mut d = Driver::new(seed);
+        d.run(30);
+        let desk = PanelId::Desk(0);
+        d.panels.type_in(desk, Command::PostType(12));
+        let mut ticks = 0;
+        while !(d.panels.link_stats(desk).keys_taken == 1 && d.panels.totals().keys_pressed == 2) {
+            d.step();
+            ticks += 1;
+            assert!(
+                ticks < 1_000,
+                "seed {seed}: the 2 never waited behind the 1"
+            );
+        }
+        d.panels.restart_panel(desk);
+        d.run_until_idle(10_000);
+        assert_eq!(d.got, [(desk, Command::PostType(12))], "seed {seed}");
+        assert_eq!(d.panels.totals().entries_refused, 0);
+        assert!(d.every_display_is_the_computers());
+    }
+}

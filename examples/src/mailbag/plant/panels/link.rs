@@ -118,6 +118,8 @@ pub struct Link<const R: usize> {
     inject: Option<(usize, u16)>,
     /// Fault injection: the MOT line as the computer reads it, stuck at this level.
     mot_stuck_at: Option<bool>,
+    /// Keys taken off panels that restarted since (their own counters started again at 0).
+    keys_popped_before: u64,
 
     stats: LinkStats,
 }
@@ -146,6 +148,7 @@ impl<const R: usize> Link<R> {
             check_at: None,
             inject: None,
             mot_stuck_at: None,
+            keys_popped_before: 0,
             stats: LinkStats {
                 bytes_sent: 0,
                 bytes_corrupted: 0,
@@ -192,6 +195,19 @@ impl<const R: usize> Link<R> {
     /// The MOT line as the computer reads it is stuck at `level` (`None`: the panel's MOT).
     pub fn stick_mot(&mut self, level: Option<bool>) {
         self.mot_stuck_at = level;
+    }
+
+    /// The panel restarts: registers 0, no keys, waiting for a reset byte (its power failed and
+    /// came back). The computer is not told. Returns how many of the keys the panel held the
+    /// computer had not taken (a key taken just before, whose SÄN fall the panel had not seen
+    /// yet, was held but is not lost).
+    pub fn restart_panel(&mut self) -> usize {
+        let popped = self.keys_popped_before + self.panel.stats().keys_sent;
+        let taken_not_popped = self.host.stats().keys.saturating_sub(popped);
+        let waiting = self.panel.keys_waiting() as u64;
+        self.keys_popped_before = popped + taken_not_popped.min(waiting);
+        self.panel = Panel::new();
+        usize::try_from(waiting.saturating_sub(taken_not_popped)).unwrap_or(usize::MAX)
     }
 
     /// The registers the computer holds for the panel.

@@ -24,17 +24,16 @@ pub mod keyboard;
 pub mod keys;
 pub mod layout;
 pub mod link;
-
-use std::collections::VecDeque;
+mod typist;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use regler_panel_link::panel::HostEvent;
 
 use self::keyboard::{Keyboard, Outcome};
-use self::keys::keys_for;
 use self::layout::{EntryDisplay, Side};
 use self::link::{Link, LinkStats};
+use self::typist::Typist;
 use super::operator::{Command, Desks, Live, PanelId, PanelTotals};
 
 /// How long a lamp test lights a panel, from the moment the computer took the key.
@@ -61,6 +60,7 @@ trait AnyLink {
     fn set_noise(&mut self, rate: f64, seed: u64);
     fn inject(&mut self, position: usize, mask: u16);
     fn stick_mot(&mut self, level: Option<bool>);
+    fn restart_panel(&mut self) -> usize;
 
     fn registers(&self) -> &[u8];
     fn display(&self) -> &[u8];
@@ -88,6 +88,9 @@ impl<const R: usize> AnyLink for Link<R> {
     fn stick_mot(&mut self, level: Option<bool>) {
         Link::stick_mot(self, level);
     }
+    fn restart_panel(&mut self) -> usize {
+        Link::restart_panel(self)
+    }
     fn registers(&self) -> &[u8] {
         Link::registers(self)
     }
@@ -114,13 +117,6 @@ impl Links {
             PanelId::Central => &mut self.central,
         }
     }
-}
-
-/// An operator's hands at one panel: the keys still to press and when the next one goes down.
-#[derive(Clone, Debug, Default)]
-struct Typist {
-    keys: VecDeque<u8>,
-    next_ms: u64,
 }
 
 /// The operator subsystem: six panel links, their keyboards and operators.
@@ -239,12 +235,27 @@ impl Panels {
         self.links.get_mut(panel).stick_mot(level);
     }
 
+    /// A fault on demand: `panel` restarts (its power fails and comes back at once): it shows
+    /// nothing until its first whole sequence and forgets the keys it held; its operator, who
+    /// sees it, presses CLEAR and keys the command they were keying again (see `typist`).
+    pub fn restart_panel(&mut self, panel: PanelId) {
+        let lost = self.links.get_mut(panel).restart_panel();
+        let pace = self.pace();
+        self.typists[panel.index()].panel_restarted(lost, self.now_ms, pace);
+    }
+
+    /// Keys pressed on `panel` that the computer has not taken yet.
+    #[must_use]
+    pub fn keys_waiting(&self, panel: PanelId) -> usize {
+        self.links.get(panel).keys_waiting()
+    }
+
     /// No operator has a key still to press or waiting in a panel.
     #[must_use]
     pub fn idle(&self) -> bool {
-        PanelId::ALL.iter().all(|&p| {
-            self.typists[p.index()].keys.is_empty() && self.links.get(p).keys_waiting() == 0
-        })
+        PanelId::ALL
+            .iter()
+            .all(|&p| self.typists[p.index()].is_empty() && self.links.get(p).keys_waiting() == 0)
     }
 
     fn pace(&mut self) -> u64 {
@@ -257,18 +268,14 @@ impl Panels {
     fn press_due_keys(&mut self) {
         for panel in PanelId::ALL {
             let i = panel.index();
-            let Some(&key) = self.typists[i].keys.front() else {
+            let Some(key) = self.typists[i].due(self.now_ms) else {
                 continue;
             };
-            if self.now_ms < self.typists[i].next_ms {
-                continue;
-            }
             // A full key queue: the operator waits for the panel to take the keys.
             if self.links.get_mut(panel).press(key) {
-                self.typists[i].keys.pop_front();
                 self.keys_pressed += 1;
                 let pace = self.pace();
-                self.typists[i].next_ms = self.now_ms.saturating_add(pace);
+                self.typists[i].pressed(self.now_ms, pace);
             }
         }
     }
@@ -312,14 +319,8 @@ impl Panels {
 
 impl Desks for Panels {
     fn type_in(&mut self, panel: PanelId, command: Command) {
-        let i = panel.index();
-        if self.typists[i].keys.is_empty() {
-            let pace = self.pace();
-            self.typists[i].next_ms = self.now_ms.saturating_add(pace);
-        }
-        let mut keys = Vec::new();
-        keys_for(command, &mut keys);
-        self.typists[i].keys.extend(keys);
+        let pace = self.pace();
+        self.typists[panel.index()].type_in(command, self.now_ms, pace);
     }
 
     fn tick_10ms(&mut self, now_ms: u64, received: &mut dyn FnMut(PanelId, Command)) {
