@@ -17,6 +17,11 @@
 //!   [`LAMP_TEST_MS`] — through the computer, like everything the panel shows (no local echo);
 //!   the command is also handed to the control program.
 //!
+//! - **Faults on demand**: line noise per link ([`Desks::set_noise`]), one damaged frame at a
+//!   chosen sequence position ([`Panels::inject`]), a MOT line stuck high or low
+//!   ([`Panels::stick_mot`]), a panel that restarts under its operator's fingers
+//!   ([`Panels::restart_panel`]). [`Panels::link_totals`] counts what they did.
+//!
 //! The driver loop is the control program's: `tick_10ms` every 10 ms, `refresh` every fifth
 //! tick, `type_in` whenever an operator has something to key.
 
