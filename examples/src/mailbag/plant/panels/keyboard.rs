@@ -384,6 +384,36 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        /// Any key bytes at all (noise, a confused operator): no panic, and every command the
+        /// keyboard makes is one the panel may take.
+        #[test]
+        fn any_key_bytes_make_only_commands_the_panel_may_take(
+            panel in proptest::sample::select(PanelId::ALL.to_vec()),
+            keys in proptest::collection::vec(
+                proptest::prop_oneof![
+                    proptest::sample::select(vec![ENTER, NEXT, CLEAR, POSTCODE, ASSIGN, EMPTYING, SCHEDULE, CALENDAR, LAMP_TEST]),
+                    DIGIT_0..DIGIT_0 + 10,
+                    proptest::arbitrary::any::<u8>(),
+                ],
+                0..40,
+            ),
+            lost in proptest::collection::vec(proptest::arbitrary::any::<bool>(), 40),
+        ) {
+            let mut kb = Keyboard::new(panel);
+            for (k, lose) in keys.into_iter().zip(lost) {
+                if lose && k % 7 == 0 {
+                    kb.key_lost();
+                }
+                if let Outcome::Command(c) = kb.key(k) {
+                    proptest::prop_assert!(allowed(panel, c), "{:?} at {:?}", c, panel);
+                }
+                let shown = kb.display();
+                proptest::prop_assert!(shown.positions.iter().all(|&p| p <= BLANK));
+            }
+        }
+    }
+
     #[test]
     fn entries_that_make_no_command() {
         let d = PanelId::Desk(0);
