@@ -82,6 +82,7 @@ pub mod layout;
 pub mod map;
 pub mod map_data;
 pub mod operator;
+pub mod panels;
 pub mod report;
 pub mod run;
 pub mod traffic;
