@@ -231,7 +231,8 @@ fn run_plant(args: &Args) -> Result<(), Stop> {
     let bar = args
         .common
         .progress(2 * config.minutes(), "simulating the plant", "minutes");
-    let report = plant::run(&config, || Panels::new(config.seed), &|m| bar.inc(m)).map_err(Stop::Error)?;
+    let report =
+        plant::run(&config, || Panels::new(config.seed), &|m| bar.inc(m)).map_err(Stop::Error)?;
     bar.finish_and_clear();
     let picture = args.common.picture();
     if let Some(path) = picture {

@@ -387,6 +387,48 @@ fn content_width(node: &MapNode, rate: &str) -> f64 {
     PAD + text + 12.0 + marks + PAD
 }
 
+/// The maps of the two runs of one plant run in one picture, the voting run above the
+/// parity-only run: the same traffic, so what differs is what the readers' decisions did.
+/// Each map is [`draw`]n whole, with its own title, and placed as a nested `<svg>`.
+pub fn draw_runs(voting: &MapData, parity_only: &MapData, title: &str) -> String {
+    let top = draw(voting, &format!("{title}: voting over the scans"));
+    let bottom = draw(parity_only, &format!("{title}: parity only (the source)"));
+    let (w1, h1) = size_of(&top);
+    let (w2, h2) = size_of(&bottom);
+    let width = w1.max(w2);
+    let height = h1 + h2;
+    let mut svg = format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}">
+<rect width="100%" height="100%" fill="white"/>
+"#,
+        w = n(width),
+        h = n(height),
+    );
+    svg.push_str(&nested(&top, 0.0));
+    svg.push_str(&nested(&bottom, h1));
+    svg.push_str("</svg>\n");
+    svg
+}
+
+/// The `width` and `height` of an SVG that [`draw`] wrote (0 where they cannot be read).
+fn size_of(svg: &str) -> (f64, f64) {
+    let head = svg.split('>').next().unwrap_or("");
+    let attr = |name: &str| {
+        head.split(&format!(" {name}=\""))
+            .nth(1)
+            .and_then(|rest| rest.split('"').next())
+            .and_then(|v| v.parse::<f64>().ok())
+            .filter(|v| v.is_finite() && *v >= 0.0)
+            .unwrap_or(0.0)
+    };
+    (attr("width"), attr("height"))
+}
+
+/// `svg` placed `y` down in a larger picture: its root element gains `y="…"`.
+fn nested(svg: &str, y: f64) -> String {
+    svg.replacen("<svg ", &format!("<svg y=\"{}\" ", n(y)), 1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -449,46 +491,22 @@ mod tests {
             assert!(scale >= max && scale <= max * 1.25, "{max} → {scale}");
         }
     }
-}
 
-/// The maps of the two runs of one plant run in one picture, the voting run above the
-/// parity-only run: the same traffic, so what differs is what the readers' decisions did.
-/// Each map is [`draw`]n whole, with its own title, and placed as a nested `<svg>`.
-pub fn draw_runs(voting: &MapData, parity_only: &MapData, title: &str) -> String {
-    let top = draw(voting, &format!("{title}: voting over the scans"));
-    let bottom = draw(parity_only, &format!("{title}: parity only (the source)"));
-    let (w1, h1) = size_of(&top);
-    let (w2, h2) = size_of(&bottom);
-    let width = w1.max(w2);
-    let height = h1 + h2;
-    let mut svg = format!(
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}">
-<rect width="100%" height="100%" fill="white"/>
-"#,
-        w = n(width),
-        h = n(height),
-    );
-    svg.push_str(&nested(&top, 0.0));
-    svg.push_str(&nested(&bottom, h1));
-    svg.push_str("</svg>\n");
-    svg
-}
-
-/// The `width` and `height` of an SVG that [`draw`] wrote (0 where they cannot be read).
-fn size_of(svg: &str) -> (f64, f64) {
-    let head = svg.split('>').next().unwrap_or("");
-    let attr = |name: &str| {
-        head.split(&format!(" {name}=\""))
-            .nth(1)
-            .and_then(|rest| rest.split('"').next())
-            .and_then(|v| v.parse::<f64>().ok())
-            .filter(|v| v.is_finite() && *v >= 0.0)
-            .unwrap_or(0.0)
-    };
-    (attr("width"), attr("height"))
-}
-
-/// `svg` placed `y` down in a larger picture: its root element gains `y="…"`.
-fn nested(svg: &str, y: f64) -> String {
-    svg.replacen("<svg ", &format!("<svg y=\"{}\" ", n(y)), 1)
+    #[test]
+    fn two_runs_stack_in_one_picture() {
+        let map = MapData {
+            hours: 1.0,
+            ..MapData::default()
+        };
+        let one = draw(&map, "x");
+        let (w, h) = size_of(&one);
+        assert!(w > 0.0 && h > 0.0, "{w} {h}");
+        let both = draw_runs(&map, &map, "x");
+        let (w2, h2) = size_of(&both);
+        assert_eq!((w2, h2), (w, 2.0 * h));
+        assert_eq!(both.matches("<svg ").count(), 3);
+        assert!(both.contains(&format!("<svg y=\"{}\" ", n(h))));
+        assert!(both.contains("x: voting over the scans"));
+        assert!(both.contains("x: parity only (the source)"));
+    }
 }

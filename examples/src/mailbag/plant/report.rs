@@ -388,22 +388,22 @@ pub fn summary_text(report: &Report) -> String {
     let _ = writeln!(
         s,
         "misdelivered per million    parity only {}   voting {}   (same seed, same traffic)",
-        number(report.misdelivered_per_million.parity_only),
-        number(report.misdelivered_per_million.voting)
+        tenths(report.misdelivered_per_million.parity_only),
+        tenths(report.misdelivered_per_million.voting)
     );
     let _ = writeln!(
         s,
         "sacks per hour loaded       P1 {}  P2 {}  P3 {}",
-        number(v.sacks_per_hour_by_desk[0]),
-        number(v.sacks_per_hour_by_desk[1]),
-        number(v.sacks_per_hour_by_desk[2])
+        tenths(v.sacks_per_hour_by_desk[0]),
+        tenths(v.sacks_per_hour_by_desk[1]),
+        tenths(v.sacks_per_hour_by_desk[2])
     );
     let _ = writeln!(
         s,
         "delivered per hour          letters (A) {}  parcels (B, C) {}  sorted post (bins) {}",
-        number(v.delivered_per_hour.letters),
-        number(v.delivered_per_hour.parcels),
-        number(v.delivered_per_hour.sorted)
+        tenths(v.delivered_per_hour.letters),
+        tenths(v.delivered_per_hour.parcels),
+        tenths(v.delivered_per_hour.sorted)
     );
     let _ = writeln!(
         s,
@@ -435,8 +435,8 @@ pub fn summary_text(report: &Report) -> String {
         s,
         "executive                   {} cycles of 50 ms; CPU load mean {} %, max {} %; worst cycle {} ms",
         v.cycles,
-        number(v.cpu_load_percent_mean),
-        number(v.cpu_load_percent_max),
+        tenths(v.cpu_load_percent_mean),
+        tenths(v.cpu_load_percent_max),
         number(v.worst_cycle_ms)
     );
     let _ = writeln!(
@@ -460,7 +460,25 @@ pub fn summary_text(report: &Report) -> String {
     let _ = writeln!(
         s,
         "\nspeed                       {} × real time (both runs in parallel)",
-        number(report.realtime_ratio)
+        whole(report.realtime_ratio)
     );
     s
+}
+
+/// `x` to one decimal, as the summary prints rates and loads (`-` if it is not a number).
+fn tenths(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:.1}")
+    } else {
+        "-".to_string()
+    }
+}
+
+/// `x` rounded to a whole number, as the summary prints the speed (`-` if it is not a number).
+fn whole(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:.0}")
+    } else {
+        "-".to_string()
+    }
 }
