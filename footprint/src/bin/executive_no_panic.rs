@@ -59,7 +59,12 @@ impl<const IW: usize, const OW: usize> Io<IW, OW> for Hardware {
         }
     }
     fn write_outputs(&mut self, outputs: &[u16; OW]) {
-        keep(outputs.iter().map(|&w| u32::from(w)).fold(0, u32::wrapping_add));
+        keep(
+            outputs
+                .iter()
+                .map(|&w| u32::from(w))
+                .fold(0, u32::wrapping_add),
+        );
     }
     fn now_us(&mut self) -> u32 {
         self.step = self.step.wrapping_add(1);
@@ -113,7 +118,10 @@ fn executive<const IW: usize, const OW: usize>(seed: usize) -> u32 {
     };
     let mut plc = Executive::<IW, OW>::new(config);
     let signals = Signals::<IW, OW>::new(&config);
-    let mut io = Hardware { now: word(seed + 2), step: seed };
+    let mut io = Hardware {
+        now: word(seed + 2),
+        step: seed,
+    };
     let mut chain: StepChain<u32, IW, OW, 2> = StepChain::new();
     for _ in 0..3 {
         if chain.push(step_on, step_do).is_err() {
@@ -128,17 +136,20 @@ fn executive<const IW: usize, const OW: usize>(seed: usize) -> u32 {
         if let Err(e) = plc.conditioning_mut().set_debounce(p, word(i) as u8) {
             answer ^= shown(&e);
         }
-        if let Err(e) = plc.conditioning_mut().set_latched(p + 1, i % 3 == 0) {
+        if let Err(e) = plc
+            .conditioning_mut()
+            .set_latched(p + 1, i.is_multiple_of(3))
+        {
             answer ^= shown(&e);
         }
         match i % 5 {
             0 => {
-                if let Err(e) = plc.force_input(p, i % 2 == 0) {
+                if let Err(e) = plc.force_input(p, i.is_multiple_of(2)) {
                     answer ^= shown(&e);
                 }
             }
             1 => {
-                if let Err(e) = plc.force_output(p, i % 2 == 0) {
+                if let Err(e) = plc.force_output(p, i.is_multiple_of(2)) {
                     answer ^= shown(&e);
                 }
             }
@@ -156,7 +167,7 @@ fn executive<const IW: usize, const OW: usize>(seed: usize) -> u32 {
             }
             _ => plc.set_now_ms(word(i)),
         }
-        let result = if i % 2 == 0 {
+        let result = if i.is_multiple_of(2) {
             plc.cycle(&mut io, |scan| {
                 program(scan);
                 chain.run(scan, &mut state);
@@ -170,7 +181,7 @@ fn executive<const IW: usize, const OW: usize>(seed: usize) -> u32 {
         let _ = spool.push(word(i));
         answer ^= spool.len() as u32 ^ u32::from(spool.is_empty());
         answer ^= spool.iter().fold(0, |a, &j| a ^ j);
-        answer ^= if i % 2 == 0 {
+        answer ^= if i.is_multiple_of(2) {
             plc.reserve(&mut io, &mut spool, word(i + 1), keep) as u32
         } else {
             plc.reserve_with(&mut io, &signals, &mut spool, word(i + 1), keep) as u32
@@ -184,7 +195,11 @@ fn executive<const IW: usize, const OW: usize>(seed: usize) -> u32 {
                 signals.power_fail();
             }
             1 => {
-                let restart = if i % 2 == 0 { Restart::Inhibit } else { Restart::WhereStopped };
+                let restart = if i.is_multiple_of(2) {
+                    Restart::Inhibit
+                } else {
+                    Restart::WhereStopped
+                };
                 plc.resume(restart);
                 signals.resume(restart);
             }
@@ -194,11 +209,17 @@ fn executive<const IW: usize, const OW: usize>(seed: usize) -> u32 {
             }
             _ => {}
         }
-        answer ^= u32::from(signals.tripped()) ^ u32::from(signals.power_failed()) ^ signals.trips();
+        answer ^=
+            u32::from(signals.tripped()) ^ u32::from(signals.power_failed()) ^ signals.trips();
         answer ^= u32::from(signals.safe_outputs().word(0).unwrap_or(0));
     }
     // Breakpoints and the monitor's commands, with run-time breakpoints and counts.
-    let breakpoints = [breakpoint(seed), breakpoint(seed + 1), breakpoint(seed + 2), breakpoint(seed + 3)];
+    let breakpoints = [
+        breakpoint(seed),
+        breakpoint(seed + 1),
+        breakpoint(seed + 2),
+        breakpoint(seed + 3),
+    ];
     let n = (word(seed) as usize) % (breakpoints.len() + 1);
     let breakpoints = &breakpoints[..n];
     if let Err(e) = plc.check_breakpoints(breakpoints) {
@@ -214,7 +235,9 @@ fn executive<const IW: usize, const OW: usize>(seed: usize) -> u32 {
         Ok((done, halt)) => answer ^= done as u32 ^ halt.map_or(0, |h| shown(&h)),
         Err(e) => answer ^= shown(&e),
     }
-    match plc.run_until(&mut io, cycles, breakpoints, program, between, |p| p.cycle_count() > 3) {
+    match plc.run_until(&mut io, cycles, breakpoints, program, between, |p| {
+        p.cycle_count() > 3
+    }) {
         Ok((done, _, stopped)) => answer ^= done as u32 ^ u32::from(stopped),
         Err(e) => answer ^= shown(&e),
     }
@@ -222,7 +245,15 @@ fn executive<const IW: usize, const OW: usize>(seed: usize) -> u32 {
         Ok((done, _)) => answer ^= done as u32,
         Err(e) => answer ^= shown(&e),
     }
-    match plc.run_until_with(&mut io, &signals, cycles, breakpoints, program, between, |_| false) {
+    match plc.run_until_with(
+        &mut io,
+        &signals,
+        cycles,
+        breakpoints,
+        program,
+        between,
+        |_| false,
+    ) {
         Ok((done, _, _)) => answer ^= done as u32,
         Err(e) => answer ^= shown(&e),
     }
@@ -235,7 +266,11 @@ fn executive<const IW: usize, const OW: usize>(seed: usize) -> u32 {
     answer ^= plc.now_ms() ^ plc.watchdog_trips() ^ plc.cycle_count() as u32;
     answer ^= u32::from(plc.halted().is_some()) ^ plc.config().period_us;
     answer ^= u32::from(plc.inputs().word(0).unwrap_or(0)) ^ u32::from(plc.outputs().get(seed));
-    answer ^= plc.raw_inputs().iter().map(|&w| u32::from(w)).fold(0, u32::wrapping_add);
+    answer ^= plc
+        .raw_inputs()
+        .iter()
+        .map(|&w| u32::from(w))
+        .fold(0, u32::wrapping_add);
     answer ^= u32::from(plc.forced_inputs().any()) ^ u32::from(plc.forced_outputs().any());
     answer ^ state
 }
@@ -249,7 +284,7 @@ fn images_and_conditioning<const W: usize>(seed: usize) -> u32 {
     for i in 0..40usize {
         let p = word(i + seed) as usize ^ i;
         answer ^= u32::from(image.get(p)) ^ u32::from(image.try_get(p).unwrap_or(false));
-        if let Err(e) = image.set(p, i % 2 == 0) {
+        if let Err(e) = image.set(p, i.is_multiple_of(2)) {
             answer ^= shown(&e);
         }
         if let Err(e) = image.set_word(p, raw(i)) {
@@ -260,19 +295,22 @@ fn images_and_conditioning<const W: usize>(seed: usize) -> u32 {
             *w ^= 1;
         }
         answer ^= image.ones().take(4).fold(0, |a, q| a ^ q as u32);
-        if let Err(e) = forcing.force(p, i % 3 == 0) {
+        if let Err(e) = forcing.force(p, i.is_multiple_of(3)) {
             answer ^= shown(&e);
         }
-        if i % 4 == 0 && forcing.unforce(p).is_err() {
+        if i.is_multiple_of(4) && forcing.unforce(p).is_err() {
             answer ^= 3;
         }
         answer ^= u32::from(forcing.forced(p).unwrap_or(false)) ^ u32::from(forcing.any());
-        answer ^= forcing.iter().take(4).fold(0, |a, (q, on)| a ^ q as u32 ^ u32::from(on));
+        answer ^= forcing
+            .iter()
+            .take(4)
+            .fold(0, |a, (q, on)| a ^ q as u32 ^ u32::from(on));
         forcing.apply(&mut image);
         if let Err(e) = conditioning.set_debounce(p, word(i) as u8) {
             answer ^= shown(&e);
         }
-        if let Err(e) = conditioning.set_latched(p, i % 5 == 0) {
+        if let Err(e) = conditioning.set_latched(p, i.is_multiple_of(5)) {
             answer ^= shown(&e);
         }
         answer ^= u32::from(conditioning.debounce(p)) ^ u32::from(conditioning.latched(p));
@@ -281,11 +319,15 @@ fn images_and_conditioning<const W: usize>(seed: usize) -> u32 {
         }
         conditioning.capture(&raw_words);
         conditioning.condition(&raw_words, &mut image);
-        if i % 13 == 0 {
+        if i.is_multiple_of(13) {
             forcing.clear();
         }
     }
-    answer ^= image.words().iter().map(|&w| u32::from(w)).fold(0, u32::wrapping_add);
+    answer ^= image
+        .words()
+        .iter()
+        .map(|&w| u32::from(w))
+        .fold(0, u32::wrapping_add);
     answer ^ u32::from(Image::<W>::from_words(raw_words).get(seed))
 }
 
@@ -307,7 +349,7 @@ fn blocks(seed: usize) -> u32 {
         answer ^= u32::from(ton.call(a, now)) ^ ton.et() ^ u32::from(ton.q()) ^ ton.pt();
         answer ^= u32::from(tof.call(b, now)) ^ tof.et() ^ u32::from(tof.q()) ^ tof.pt();
         answer ^= u32::from(tp.call(a ^ b, now)) ^ tp.et() ^ u32::from(tp.q()) ^ tp.pt();
-        if i % 17 == 0 {
+        if i.is_multiple_of(17) {
             ton.set_pt(word(i));
             tof.set_pt(word(i + 1));
             tp.set_pt(word(i + 2));
@@ -315,9 +357,11 @@ fn blocks(seed: usize) -> u32 {
             ctd.set_pv(pv(i + 1));
             ctud.set_pv(pv(i + 2));
         }
-        answer ^= u32::from(ctu.call(a, b && i % 50 == 0)) ^ ctu.cv() as u32 ^ u32::from(ctu.q());
-        answer ^= u32::from(ctd.call(b, a && i % 50 == 0)) ^ ctd.cv() as u32;
-        let (up, down) = ctud.call(a, b, i % 60 == 0, i % 70 == 0);
+        answer ^= u32::from(ctu.call(a, b && i.is_multiple_of(50)))
+            ^ ctu.cv() as u32
+            ^ u32::from(ctu.q());
+        answer ^= u32::from(ctd.call(b, a && i.is_multiple_of(50))) ^ ctd.cv() as u32;
+        let (up, down) = ctud.call(a, b, i.is_multiple_of(60), i.is_multiple_of(70));
         answer ^= u32::from(up) ^ u32::from(down) ^ ctud.cv() as u32;
         answer ^= u32::from(rt.call(a)) ^ u32::from(ft.call(b));
         answer ^= u32::from(sr.call(a, b)) ^ u32::from(rs.call(b, a));

@@ -131,7 +131,11 @@ fn host_and_panel<const R: usize>(seed: usize) -> u32 {
         }
         if let Some(b) = host.next_byte() {
             let b = if byte(i) == 0x10 { b ^ 1 } else { b };
-            panel.receive(if byte(i) == 0x3F { Err(LineError::Framing) } else { Ok(b) });
+            panel.receive(if byte(i) == 0x3F {
+                Err(LineError::Framing)
+            } else {
+                Ok(b)
+            });
         }
         panel.receive(received(i * 7 + seed));
         if let Err(e) = panel.press(byte(i * 5)) {
@@ -174,12 +178,20 @@ fn message(i: usize) -> Message {
             station: byte(i + 3),
             subaddress: byte(i + 4),
             function: f,
-            data: if byte(i + 5) & 1 != 0 { Some(word(i)) } else { None },
+            data: if byte(i + 5) & 1 != 0 {
+                Some(word(i))
+            } else {
+                None
+            },
         },
         1 => Message::Reply {
             crate_address: byte(i + 2),
             status: Status::from_bits(byte(i + 3)),
-            data: if byte(i + 5) & 1 != 0 { Some(word(i)) } else { None },
+            data: if byte(i + 5) & 1 != 0 {
+                Some(word(i))
+            } else {
+                None
+            },
         },
         _ => Message::Demand {
             crate_address: byte(i + 2),
@@ -273,7 +285,7 @@ fn highway_machines<const W: usize>(seed: usize) -> u32 {
     let mut back = highway::WAIT;
     let mut buf = [0u8; MAX_MESSAGE];
     for i in 0..600usize {
-        if i % 40 == 0 {
+        if i.is_multiple_of(40) {
             match driver.submit(message(i + seed)) {
                 Ok(tag) => answer ^= tag,
                 Err(e) => answer ^= shown(&e),

@@ -184,7 +184,12 @@ fn operate<T: Scalar>(station: &mut Station<T, f32>) {
     word(u32::from(station.alarm_state() == alarm.state()));
     word(station.commits());
     output(station.pid().output());
-    if flag(11) && station.pid_mut().set_manual(T::from_real(reading(MANUAL))).is_err() {
+    if flag(11)
+        && station
+            .pid_mut()
+            .set_manual(T::from_real(reading(MANUAL)))
+            .is_err()
+    {
         word(4);
     }
     // Scaling: counts from the A/D, values to the D/A, run-time values all.
@@ -217,7 +222,17 @@ fn station<T: Scalar>(params: Parameters<f32>, scaling: Scaling<f32>) -> Station
 
 /// Numbers as a log, an operator or a stored model would give them (NaN, ±∞, 0, a subnormal).
 static NUMBERS: [f32; 12] = [
-    0.0, 1.0, -1.0, 0.5, 2.5, 100.0, 1e-40, 3.0e38, f32::NAN, f32::INFINITY, f32::NEG_INFINITY,
+    0.0,
+    1.0,
+    -1.0,
+    0.5,
+    2.5,
+    100.0,
+    1e-40,
+    3.0e38,
+    f32::NAN,
+    f32::INFINITY,
+    f32::NEG_INFINITY,
     0.01,
 ];
 /// Counts: log lengths, step indices, cycles, kinds.
@@ -277,7 +292,11 @@ fn tune<F: Real + Scalar>(seed: usize) {
     }
     // The relay experiment from a run-time configuration, over a run-time process.
     let relay_config = RelayConfig {
-        action: if seed % 2 == 0 { Action::Direct } else { Action::Reverse },
+        action: if seed.is_multiple_of(2) {
+            Action::Direct
+        } else {
+            Action::Reverse
+        },
         bias: number::<F>(seed + 9),
         amplitude: number::<F>(seed + 1),
         hysteresis: number::<F>(seed + 11),
@@ -301,7 +320,10 @@ fn tune<F: Real + Scalar>(seed: usize) {
             real(found.ku);
         }
         match relay.hand_over::<F>(&config, number::<F>(seed), number::<F>(seed + 1)) {
-            Ok(mut pid) => real(pid.update(number::<F>(seed), number::<F>(seed + 2)).to_real::<F>()),
+            Ok(mut pid) => real(
+                pid.update(number::<F>(seed), number::<F>(seed + 2))
+                    .to_real::<F>(),
+            ),
             Err(_) => keep(2),
         }
         real(relay.abort());
@@ -313,20 +335,19 @@ fn tune<F: Real + Scalar>(seed: usize) {
         dead_band: number::<F>(seed + 11),
         h: number::<F>(seed + 1),
     };
-    let valve = ThreePoint::new(actuator_config, number::<F>(seed + 3))
-        .or_else(|_| {
-            let sane = ActuatorConfig {
-                run_time: number::<F>(5),
-                min_pulse: number::<F>(11),
-                dead_band: number::<F>(11),
-                h: number::<F>(1),
-            };
-            ThreePoint::new(sane, F::default())
-        });
+    let valve = ThreePoint::new(actuator_config, number::<F>(seed + 3)).or_else(|_| {
+        let sane = ActuatorConfig {
+            run_time: number::<F>(5),
+            min_pulse: number::<F>(11),
+            dead_band: number::<F>(11),
+            h: number::<F>(1),
+        };
+        ThreePoint::new(sane, F::default())
+    });
     match valve {
         Ok(mut valve) => {
             for i in 0..100usize {
-                let drive = if i % 2 == 0 {
+                let drive = if i.is_multiple_of(2) {
                     valve.update(number::<F>(i + seed))
                 } else {
                     valve.update_delta(number::<F>(i))
@@ -336,8 +357,8 @@ fn tune<F: Real + Scalar>(seed: usize) {
                     Ok(_) => keep(3),
                     Err(e) => keep(shown(&e)),
                 }
-                if i % 17 == 0 {
-                    valve.at_end(i % 34 == 0);
+                if i.is_multiple_of(17) {
+                    valve.at_end(i.is_multiple_of(34));
                 }
             }
             let (opened, closed) = valve.driven();

@@ -36,7 +36,6 @@ static BYTES: [u8; 16] = [
 ];
 /// Numbers as stored state or a peer would give them (0 and the maxima among them).
 static WORDS: [u32; 8] = [0, 1, 2, 3, 64, 1000, 0xFFFF, u32::MAX];
-static mut SHARED: SharedRing<u8, 4> = SharedRing::new();
 
 fn byte(i: usize) -> u8 {
     at(&BYTES, i)
@@ -51,7 +50,7 @@ fn rings<const N: usize>(seed: usize) -> u32 {
     let mut ring: Ring<u8, N> = Ring::new();
     let mut answer = ring.capacity() as u32;
     for i in 0..(3 * N + 5) {
-        if word(i + seed) % 3 != 0 {
+        if !word(i + seed).is_multiple_of(3) {
             answer ^= u32::from(ring.receive(byte(i)).is_err());
         } else {
             answer ^= u32::from(ring.next().unwrap_or(0));
@@ -78,11 +77,11 @@ fn rings<const N: usize>(seed: usize) -> u32 {
 
 /// The split halves of a shared ring, filled past full and drained past empty.
 fn split() -> u32 {
-    let shared = unsafe { &mut *(&raw mut SHARED) };
+    let mut shared: SharedRing<u8, 4> = SharedRing::new();
     let mut answer = shared.capacity() as u32;
     let (mut filler, mut drainer) = shared.split();
     for i in 0..40usize {
-        if word(i) % 3 != 0 {
+        if !word(i).is_multiple_of(3) {
             answer ^= u32::from(filler.receive(byte(i)).is_err());
         } else {
             answer ^= u32::from(drainer.next().unwrap_or(0));
@@ -118,10 +117,10 @@ fn frames() -> u32 {
             slave: byte(i),
             consumed: word(i) as u16,
             received: word(i + 1) as u16,
-            standalone: i % 2 == 0,
-            retry: i % 3 == 0,
+            standalone: i.is_multiple_of(2),
+            retry: i.is_multiple_of(3),
             boot: byte(i + 2),
-            hello: i % 5 == 0,
+            hello: i.is_multiple_of(5),
         };
         let len = (word(i + 2) as usize).min(out.len());
         match report.encode(&mut out[..len]) {
@@ -129,7 +128,7 @@ fn frames() -> u32 {
             Err(e) => answer ^= shown(&e),
         }
         let items = &input[..(word(i + 3) as usize).min(input.len())];
-        let refill = if i % 7 == 0 {
+        let refill = if i.is_multiple_of(7) {
             Refill::keep_alive(byte(i))
         } else {
             Refill {
@@ -204,7 +203,7 @@ fn master_and_slave<const N: usize>(seed: usize) -> u32 {
                 Err(e) => answer ^= shown(&e),
             }
         }
-        let report = slave.report(i % 2 == 0);
+        let report = slave.report(i.is_multiple_of(2));
         let _ = master.on_report(now, who & 1, &report);
         if let Some(grant) = master.next_refill(now, word(i + 1)) {
             let n = (grant.count as usize).min(items.len());

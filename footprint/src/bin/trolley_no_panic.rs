@@ -15,8 +15,7 @@ use core::ptr::{addr_of, read_volatile, write_volatile};
 use cortex_m_rt::entry;
 use regler_footprint::{MEASURING, at, finish, keep, refused, shown, stack};
 use regler_trolley_id::{
-    AlarmLimits, ReaderHealth, Registry, Route, Strategy, TrolleyId, Verdict, Voter, decode,
-    encode,
+    AlarmLimits, ReaderHealth, Registry, Route, Strategy, TrolleyId, Verdict, Voter, decode, encode,
 };
 
 static READINGS: [u16; 5] = [0x04D2, 0x04D2, 0x04D0, 0, 0x0001];
@@ -33,7 +32,9 @@ fn codes_registry_and_voters() -> u32 {
     let mut answer = 0u32;
     let mut registry: Registry<u16> = Registry::new();
     for i in 0..64usize {
-        let raw = at(&WORDS, i).wrapping_add(i as u16).wrapping_mul(at(&WORDS, i / 8));
+        let raw = at(&WORDS, i)
+            .wrapping_add(i as u16)
+            .wrapping_mul(at(&WORDS, i / 8));
         match decode(raw) {
             Ok(id) => {
                 answer ^= u32::from(encode(id)) ^ u32::from(id.get()) ^ shown(&id);
