@@ -1,13 +1,16 @@
 //! A probe, not a measurement: firmware whose panic handler calls a function that is declared
 //! but defined nowhere, so it links only if no panic path is left in what it calls — all of
-//! `regler-panel-link` without the `io` adapters (they need the `embedded-io` feature): `line`
+//! `regler-panel-link`: `line`
 //! (`Framing` of every parity, `encode`/`decode` of run-time bytes and frames, `BitReceiver` fed
 //! run-time bits, `Noise` with run-time rates, NaN and ±∞ among them), `panel` (`Host` and
 //! `Panel` of 1, 2 and 46 registers: `set` at run-time indices and values, `next_byte`,
 //! `poll_mot`, `receive` of run-time bytes and line errors, `press`, `set_san`, `tick_20ms`, the
 //! read-outs) and `highway` (`Message` built from run-time fields, `validate`, `encode` into
 //! buffers of run-time length, `decode` of run-time bytes, the sums and byte helpers, `Status`,
-//! `Controller::new`/`clock` over a dataway, `Driver::new`/`submit`/`clock`, every error's
+//! `Controller::new`/`clock` over a dataway, `Driver::new`/`submit`/`clock`), the `io` adapters
+//! (`read_byte`, `write_byte`, `clock_controller`, `clock_driver`, `host_transmit`,
+//! `panel_receive`) over a port whose answers are read at run time (bytes, 0 = closed, short
+//! writes, interrupted, timed-out and other errors, a failing flush), every error's
 //! `Display` but `NoiseError`'s, which prints an `f64` through core's float formatting: that keeps
 //! panic paths of core's own, so no probe can link with it). The measuring build (feature `measure`) runs the calls under QEMU with an
 //! ordinary panic handler.
@@ -20,6 +23,7 @@ use regler_panel_link::highway::{
     self, Controller, ControllerConfig, Cycle, Dataway, Driver, DriverConfig, DriverEvent,
     MAX_DECODE, MAX_MESSAGE, Message, Status,
 };
+use regler_panel_link::io::{self, ControllerLink, DriverLink, Transmit};
 use regler_panel_link::line::{BitReceiver, Framing, LineError, Noise, Parity};
 use regler_panel_link::panel::{Host, HostConfig, HostEvent, Panel};
 
@@ -318,6 +322,100 @@ fn highway_machines<const W: usize>(seed: usize) -> u32 {
     answer
 }
 
+/// A serial port whose every answer is read at run time: a byte, end of stream (0 bytes), or an
+/// error of any kind (interrupted ones are retried by the adapters, so the table has others).
+struct Port(usize);
+
+impl embedded_io::ErrorType for Port {
+    type Error = embedded_io::ErrorKind;
+}
+
+impl Port {
+    fn answer(&mut self) -> Result<usize, embedded_io::ErrorKind> {
+        self.0 = self.0.wrapping_add(1);
+        match byte(self.0.wrapping_mul(7)) {
+            0x00 => Ok(0),
+            0x7F => Err(embedded_io::ErrorKind::Interrupted),
+            0x80 => Err(embedded_io::ErrorKind::TimedOut),
+            0xFE => Err(embedded_io::ErrorKind::Other),
+            b => Ok(usize::from(b)),
+        }
+    }
+}
+
+impl embedded_io::Read for Port {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, embedded_io::ErrorKind> {
+        let n = self.answer()?.min(buf.len());
+        for (k, b) in buf.iter_mut().take(n).enumerate() {
+            *b = byte(self.0 ^ k);
+        }
+        Ok(n)
+    }
+}
+
+impl embedded_io::Write for Port {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, embedded_io::ErrorKind> {
+        let n = self.answer()?.min(buf.len());
+        keep(buf.iter().take(n).map(|&b| u32::from(b)).sum());
+        Ok(n)
+    }
+    fn flush(&mut self) -> Result<(), embedded_io::ErrorKind> {
+        self.answer().map(|_| ())
+    }
+}
+
+/// The `io` adapters over a port of run-time answers.
+fn adapters<const R: usize, const W: usize>(seed: usize) -> u32 {
+    let mut answer = 0u32;
+    let mut port = Port(seed);
+    let mut modules = Modules([0; 32]);
+    let (Ok(mut controller), Ok(mut driver), Ok(mut host)) = (
+        Controller::new(ControllerConfig::default()),
+        Driver::<W>::new(DriverConfig::for_loop(1)),
+        Host::<R>::new(HostConfig::default()),
+    ) else {
+        return 0;
+    };
+    let mut panel = Panel::<R>::new();
+    let mut controller_link = ControllerLink::default();
+    let mut driver_link = DriverLink::default();
+    for i in 0..200usize {
+        match io::read_byte(&mut port) {
+            Ok(b) => answer ^= u32::from(b),
+            Err(e) => answer ^= shown(&e),
+        }
+        if let Err(e) = io::write_byte(&mut port, byte(i)) {
+            answer ^= shown(&e);
+        }
+        if let Err(e) = io::clock_controller(
+            &mut port,
+            &mut controller,
+            &mut modules,
+            &mut controller_link,
+        ) {
+            answer ^= shown(&e);
+        }
+        answer ^= controller_link.unsent().map_or(0, u32::from);
+        if i.is_multiple_of(30) {
+            let _ = driver.submit(message(i + seed));
+        }
+        match io::clock_driver(&mut port, &mut driver, &mut driver_link) {
+            Ok(event) => answer ^= u32::from(event.is_some()),
+            Err(e) => answer ^= shown(&e) ^ u32::from(e.event.is_some()),
+        }
+        answer ^= u32::from(driver_link.interrupted());
+        match io::host_transmit(&mut port, &mut host) {
+            Ok(Transmit::Sent) => answer ^= 1,
+            Ok(_) => answer ^= 2,
+            Err(e) => answer ^= shown(&e),
+        }
+        if let Err(e) = io::panel_receive(&mut port, &mut panel) {
+            answer ^= shown(&e);
+        }
+    }
+    answer
+}
+
 #[entry]
 fn main() -> ! {
     let mut answer = line();
@@ -327,6 +425,8 @@ fn main() -> ! {
     answer ^= highway_messages();
     answer ^= highway_machines::<1>(0);
     answer ^= highway_machines::<4>(5);
+    answer ^= adapters::<1, 1>(0);
+    answer ^= adapters::<46, 4>(3);
     keep(answer);
     if MEASURING {
         finish();
