@@ -75,6 +75,39 @@ macro_rules! no_panic_probe {
     };
 }
 
+/// What a probe's inputs are: words read at run time, so the compiler must allow for any value.
+/// A probe keeps its own `static mut` table and reads it through [`at`], index taken modulo the
+/// table's length (the index itself may come from run time).
+pub fn at<T: Copy, const N: usize>(table: &'static [T; N], i: usize) -> T {
+    // A volatile read of an element of a static array, the index in range.
+    let i = if N == 0 { 0 } else { i % N };
+    unsafe { core::ptr::read_volatile(table.as_ptr().add(i)) }
+}
+
+/// Writes `value` where the compiler must assume it is read (so nothing computed is dropped).
+pub fn keep(value: u32) {
+    static mut SINK: u32 = 0;
+    unsafe { core::ptr::write_volatile(&raw mut SINK, value) };
+}
+
+/// A hash of what `value`'s `Display` writes, so a probe runs the formatting code an operator's
+/// screen would.
+pub fn shown(value: &impl core::fmt::Display) -> u32 {
+    struct Count(u32);
+    impl core::fmt::Write for Count {
+        fn write_str(&mut self, s: &str) -> core::fmt::Result {
+            for b in s.bytes() {
+                self.0 = self.0.wrapping_mul(31).wrapping_add(u32::from(b));
+            }
+            Ok(())
+        }
+    }
+    let mut count = Count(0);
+    let _ = core::fmt::write(&mut count, format_args!("{value}"));
+    keep(count.0);
+    count.0
+}
+
 #[cfg(feature = "measure")]
 mod measure {
     // The stack is raw memory between two linker symbols: reading and repainting it needs raw

@@ -3,7 +3,8 @@
 //! calendar (`DateTime::new`, `advance` over every size of step, `MinuteTable::add`, `check`,
 //! `due`, `set_checked_up_to`), input conditioning (`set_debounce`, `set_latched`, `capture`,
 //! `condition`, on points read at run time) and the timer shift register (`insert`, `tick`,
-//! `remaining`, `replace`, `remove` with delays read at run time). The measuring build (feature
+//! `remaining`, `replace`, `remove` with delays read at run time), and the `Display` of `DateTime`
+//! and of every error here. The measuring build (feature
 //! `measure`) runs the calls under QEMU with an ordinary panic handler.
 #![no_std]
 #![no_main]
@@ -12,7 +13,7 @@ use core::hint::black_box;
 use core::ptr::{addr_of, read_volatile, write_volatile};
 
 use cortex_m_rt::entry;
-use regler_footprint::{MEASURING, finish};
+use regler_footprint::{MEASURING, finish, shown};
 use regler_scan_cycle::{Conditioning, DateTime, Image, MinuteTable, Start, TimerQueue, Weekdays};
 
 static FIELDS: [u16; 6] = [9999, 12, 31, 23, 58, 30];
@@ -34,15 +35,20 @@ fn main() -> ! {
     let mut acc = 0u64;
     let year = unsafe { read_volatile(addr_of!(FIELDS)) }[0];
     let mut clock = DateTime::new(year, field(1), field(2), field(3), field(4), field(5))
-        .unwrap_or(DateTime::END);
+        .unwrap_or_else(|e| {
+            acc ^= u64::from(shown(&e));
+            DateTime::END
+        });
     let mut table: MinuteTable<u8, 8> = MinuteTable::new();
     for (i, &(hour, minute, days)) in unsafe { read_volatile(addr_of!(LINES)) }.iter().enumerate() {
-        let _ = table.add(Start {
+        if let Err(e) = table.add(Start {
             hour,
             minute,
             days: Weekdays(days),
             program: i as u8,
-        });
+        }) {
+            acc ^= u64::from(shown(&e));
+        }
     }
     for &step in unsafe { read_volatile(addr_of!(STEPS)) }.iter() {
         acc = acc.wrapping_add(u64::from(clock.advance(black_box(step))));
@@ -53,6 +59,7 @@ fn main() -> ! {
         });
         acc = acc.wrapping_add(checked.missed ^ checked.behind_minutes);
         acc = acc.wrapping_add(u64::from(clock.weekday()) + u64::from(clock.iso_week()));
+        acc ^= u64::from(shown(&clock));
         for program in table.due(&clock) {
             acc = acc.wrapping_add(u64::from(*program));
         }
@@ -87,14 +94,19 @@ fn main() -> ! {
         .iter_mut()
         .zip(unsafe { read_volatile(addr_of!(DELAYS)) }.iter())
     {
-        *slot = queue.insert(delay, delay).ok();
+        *slot = queue
+            .insert(delay, delay)
+            .map_err(|e| acc ^= u64::from(shown(&e)))
+            .ok();
     }
     for _ in 0..black_box(3) {
         queue.tick(|action| acc = acc.wrapping_add(u64::from(action)));
     }
     for id in ids.iter().flatten() {
         acc ^= u64::from(queue.remaining(*id).unwrap_or(7));
-        acc ^= u64::from(queue.replace(*id, black_box(5)).is_ok());
+        if let Err(e) = queue.replace(*id, black_box(5)) {
+            acc ^= u64::from(shown(&e));
+        }
         acc ^= u64::from(queue.remove(*id).unwrap_or(9));
     }
     unsafe { write_volatile(&raw mut OUT, acc) };
