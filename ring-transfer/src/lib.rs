@@ -21,7 +21,7 @@ mod split;
 
 pub use link::{Message, Refill, Report, decode};
 pub use master::{Grant, Master, MasterError, ReportOutcome, SlaveParams, SlaveStatus};
-pub use ring::{Counters, Ring, Stats};
+pub use ring::{Counters, Item, Ring, Stats};
 pub use slave::{
     FrameError, MAX_DRIFT, Mode, Output, Slave, SlaveConfig, SlaveConfigError, SlaveStats, Source,
 };

@@ -30,6 +30,92 @@ fn ops() -> impl Strategy<Value = Vec<Op>> {
     )
 }
 
+/// What a ring may be asked to do: the hot path and the two housekeeping calls.
+#[derive(Debug, Clone, Copy)]
+enum RingOp {
+    Receive(u8),
+    Next,
+    Clear,
+    ResetStats,
+}
+
+fn ring_ops() -> impl Strategy<Value = Vec<RingOp>> {
+    proptest::collection::vec(
+        prop_oneof![
+            8 => any::<u8>().prop_map(RingOp::Receive),
+            8 => Just(RingOp::Next),
+            1 => Just(RingOp::Clear),
+            1 => Just(RingOp::ResetStats),
+        ],
+        0..300,
+    )
+}
+
+/// `Ring<u8, N>` against a bounded `VecDeque` and the statistics' definitions: underruns
+/// counted; the least slack the fewest items left right after a consumption (0 after an
+/// underrun, `N` before any consumption, the items held at a reset); the counters count items
+/// stored and handed out, whatever `clear` drops.
+fn ring_matches_the_model<const N: usize>(ops: &[RingOp]) -> Result<(), TestCaseError> {
+    let mut ring: Ring<u8, N> = Ring::new();
+    let mut model: VecDeque<u8> = VecDeque::new();
+    let (mut underruns, mut least, mut received, mut consumed) = (0u32, N, 0u32, 0u32);
+    for &op in ops {
+        match op {
+            RingOp::Receive(x) => {
+                let expected = if model.len() < N {
+                    model.push_back(x);
+                    received += 1;
+                    Ok(())
+                } else {
+                    Err(x)
+                };
+                prop_assert_eq!(ring.receive(x), expected);
+            }
+            RingOp::Next => {
+                let expected = model.pop_front();
+                match expected {
+                    Some(_) => {
+                        consumed += 1;
+                        least = least.min(model.len());
+                    }
+                    None => {
+                        underruns += 1;
+                        least = 0;
+                    }
+                }
+                prop_assert_eq!(ring.next(), expected);
+            }
+            RingOp::Clear => {
+                model.clear();
+                ring.clear();
+            }
+            RingOp::ResetStats => {
+                underruns = 0;
+                least = model.len();
+                ring.reset_stats();
+            }
+        }
+        prop_assert_eq!(ring.slack(), model.len());
+        prop_assert_eq!(ring.len(), model.len());
+        prop_assert_eq!(ring.requests(), N - model.len());
+        prop_assert_eq!(ring.deadline(7), 7 * model.len() as u64);
+        prop_assert_eq!(
+            (ring.is_empty(), ring.is_full()),
+            (model.is_empty(), model.len() == N)
+        );
+        let stats = ring.stats();
+        prop_assert_eq!(
+            (stats.underruns, stats.least_slack, stats.most_requests),
+            (underruns, least, N - least)
+        );
+        prop_assert_eq!(
+            (ring.counters().received, ring.counters().consumed),
+            (received, consumed)
+        );
+    }
+    Ok(())
+}
+
 proptest! {
     /// The ring behaves as a bounded `VecDeque`, and its statistics are what the model saw.
     #[test]
@@ -61,6 +147,20 @@ proptest! {
         prop_assert_eq!((ring.counters().received, ring.counters().consumed), (received, consumed));
     }
 
+    /// The same after every operation, with `clear` and `reset_stats` mixed in, for a power of two
+    /// (the slot is the count's low bits), sizes that are not (an index wraps beside the count),
+    /// and the one-slot ring.
+    #[test]
+    fn ring_of_any_size_matches_the_model(ops in ring_ops()) {
+        ring_matches_the_model::<8>(&ops)?;
+        ring_matches_the_model::<5>(&ops)?;
+        ring_matches_the_model::<3>(&ops)?;
+        ring_matches_the_model::<1>(&ops)?;
+        ring_matches_the_model::<16>(&ops)?;
+    }
+}
+
+proptest! {
     /// The split halves, used in any order one operation at a time, are the same bounded FIFO.
     #[test]
     fn split_halves_are_a_bounded_fifo(ops in ops()) {
