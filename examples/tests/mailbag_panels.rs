@@ -760,7 +760,7 @@ fn phantom_commands(
             assert_eq!(pp, panel);
             got.push(c)
         });
-        if ms % 50 == 0 {
+        if ms.is_multiple_of(50) {
             p.refresh(&live);
         }
     }
