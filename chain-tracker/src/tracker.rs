@@ -933,6 +933,19 @@ mod tests {
         t.enter(6, 0).unwrap();
     }
 
+    /// `capacity` is `N`: the trolleys `enter` takes before it says `Full`.
+    #[test]
+    fn capacity_is_the_trolleys_it_takes() {
+        let mut t = tracker::<3>(&[10], 6);
+        assert_eq!(t.capacity(), 3);
+        for k in 0..3 {
+            t.enter(k, 0).unwrap();
+        }
+        assert_eq!(t.enter(9, 0), Err(EnterError::Full(9)));
+        assert_eq!(t.len(), t.capacity());
+        assert_eq!(tracker::<512>(&[10], 6).capacity(), 512);
+    }
+
     #[test]
     fn zero_distance_counts_as_one_and_zero_hold_is_refused() {
         let mut t = tracker::<2>(&[0], 1);
