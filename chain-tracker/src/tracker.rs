@@ -933,11 +933,13 @@ mod tests {
         t.enter(6, 0).unwrap();
     }
 
-    /// `capacity` is `N`: the trolleys `enter` takes before it says `Full`.
+    /// `capacity` is `N`, the trolleys `enter` takes before it says `Full`; `hold` is the hold
+    /// the tracker was built with.
     #[test]
-    fn capacity_is_the_trolleys_it_takes() {
+    fn capacity_and_hold_are_what_it_was_built_with() {
         let mut t = tracker::<3>(&[10], 6);
-        assert_eq!(t.capacity(), 3);
+        assert_eq!((t.capacity(), t.hold()), (3, 6));
+        assert_eq!(tracker::<3>(&[10], 250).hold(), 250);
         for k in 0..3 {
             t.enter(k, 0).unwrap();
         }
