@@ -1116,6 +1116,43 @@ mod tests {
         assert_eq!(t.table().distance(0), Some(47));
     }
 
+    /// A tracker whose table has fewer tippers than its capacity `T` refuses a snapshot that
+    /// names a tipper past the table's last, set or with a trolley bound for it, exactly from
+    /// the first such tipper on.
+    #[test]
+    fn a_snapshot_naming_a_tipper_past_the_tables_last_is_refused() {
+        let mut t = tracker::<4>(&[10, 20], 6); // two tippers in a table of capacity 8
+        let good = t.snapshot();
+        for tipper in [2, 3, 7] {
+            let mut bad = good.clone();
+            bad.held
+                .push(HeldTipper {
+                    tipper,
+                    remaining: 3,
+                })
+                .unwrap();
+            assert_eq!(t.restore(&bad), Err(TrackerError::UnknownTipper { tipper }));
+            let mut bad = good.clone();
+            bad.in_flight
+                .push(InFlight {
+                    trolley: 1,
+                    tipper,
+                    remaining: 5,
+                })
+                .unwrap();
+            assert_eq!(t.restore(&bad), Err(TrackerError::UnknownTipper { tipper }));
+        }
+        let mut last = good.clone();
+        last.held
+            .push(HeldTipper {
+                tipper: 1,
+                remaining: 3,
+            })
+            .unwrap();
+        assert_eq!(t.restore(&last), Ok(()));
+        assert!(t.is_set(1) && !t.is_set(2));
+    }
+
     #[test]
     fn restore_refuses_bad_snapshots() {
         let mut t = tracker::<4>(&[10], 6);
