@@ -368,6 +368,31 @@ mod tests {
         assert_eq!(t.recalibrate(1), Ok(false));
     }
 
+    /// What a table reports: SIA, DIA, the number of tippers, each static and dynamic
+    /// distance (none past the last tipper) and the stretch, before and after recalibrations.
+    #[test]
+    fn the_table_reports_what_it_holds() {
+        let mut t = DistanceTable::<4>::new(3000, &[100, 2000, 4000]).unwrap();
+        assert_eq!((t.sia(), t.dia(), t.tippers()), (3000, 3000, 3));
+        assert_eq!(t.stretch_per_mille(), 0);
+        assert_eq!(t.recalibrate(2985), Ok(true));
+        assert_eq!((t.sia(), t.dia(), t.tippers()), (3000, 2985, 3));
+        // 100·2985/3000 = 99.5 rounds half up to 100.
+        assert_eq!(t.distances(), [100, 1990, 3980]);
+        assert_eq!(
+            (0..4).map(|i| t.static_distance(i)).collect::<Vec<_>>(),
+            [Some(100), Some(2000), Some(4000), None]
+        );
+        assert_eq!(
+            (0..4).map(|i| t.distance(i)).collect::<Vec<_>>(),
+            [Some(100), Some(1990), Some(3980), None]
+        );
+        assert_eq!(t.stretch_per_mille(), 5);
+        assert_eq!(t.recalibrate(3015), Ok(true));
+        assert_eq!(t.stretch_per_mille(), -5);
+        assert_eq!(t.static_distance(2), Some(4000));
+    }
+
     #[test]
     fn stretch_is_signed_and_rounded() {
         assert_eq!(stretch_per_mille(3000, 2985), 5);

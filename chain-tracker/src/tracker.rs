@@ -933,6 +933,21 @@ mod tests {
         t.enter(6, 0).unwrap();
     }
 
+    /// `capacity` is `N`, the trolleys `enter` takes before it says `Full`; `hold` is the hold
+    /// the tracker was built with.
+    #[test]
+    fn capacity_and_hold_are_what_it_was_built_with() {
+        let mut t = tracker::<3>(&[10], 6);
+        assert_eq!((t.capacity(), t.hold()), (3, 6));
+        assert_eq!(tracker::<3>(&[10], 250).hold(), 250);
+        for k in 0..3 {
+            t.enter(k, 0).unwrap();
+        }
+        assert_eq!(t.enter(9, 0), Err(EnterError::Full(9)));
+        assert_eq!(t.len(), t.capacity());
+        assert_eq!(tracker::<512>(&[10], 6).capacity(), 512);
+    }
+
     #[test]
     fn zero_distance_counts_as_one_and_zero_hold_is_refused() {
         let mut t = tracker::<2>(&[0], 1);
@@ -1099,6 +1114,43 @@ mod tests {
             assert_eq!(run(&mut fresh, 60), run(&mut t.clone(), 60));
         }
         assert_eq!(t.table().distance(0), Some(47));
+    }
+
+    /// A tracker whose table has fewer tippers than its capacity `T` refuses a snapshot that
+    /// names a tipper past the table's last, set or with a trolley bound for it, exactly from
+    /// the first such tipper on.
+    #[test]
+    fn a_snapshot_naming_a_tipper_past_the_tables_last_is_refused() {
+        let mut t = tracker::<4>(&[10, 20], 6); // two tippers in a table of capacity 8
+        let good = t.snapshot();
+        for tipper in [2, 3, 7] {
+            let mut bad = good.clone();
+            bad.held
+                .push(HeldTipper {
+                    tipper,
+                    remaining: 3,
+                })
+                .unwrap();
+            assert_eq!(t.restore(&bad), Err(TrackerError::UnknownTipper { tipper }));
+            let mut bad = good.clone();
+            bad.in_flight
+                .push(InFlight {
+                    trolley: 1,
+                    tipper,
+                    remaining: 5,
+                })
+                .unwrap();
+            assert_eq!(t.restore(&bad), Err(TrackerError::UnknownTipper { tipper }));
+        }
+        let mut last = good.clone();
+        last.held
+            .push(HeldTipper {
+                tipper: 1,
+                remaining: 3,
+            })
+            .unwrap();
+        assert_eq!(t.restore(&last), Ok(()));
+        assert!(t.is_set(1) && !t.is_set(2));
     }
 
     #[test]

@@ -2,7 +2,9 @@
 #![cfg(feature = "serde")]
 #![allow(clippy::unwrap_used, reason = "a test may panic: that is how it fails")]
 
-use regler_chain_tracker::{DistanceTable, Snapshot, StretchConfig, StretchMeter, Tracker};
+use regler_chain_tracker::{
+    DistanceTable, Measurement, Snapshot, StretchConfig, StretchMeter, Tracker,
+};
 
 #[test]
 fn snapshot_round_trips_through_serde() {
@@ -48,4 +50,55 @@ fn bad_stored_stretch_meters_are_refused() {
         .to_string();
     assert!(err.contains("DIA must not be 0"), "{err}");
     assert!(StretchMeter::with_dia(StretchConfig::new(3000), 0).is_err());
+}
+
+/// A stored meter comes back as it was stored: its counters, the count running between the
+/// initiators and a half-confirmed candidate (power failed between two measurements of a
+/// stretched chain: the next measurement confirms it, as without the power failure). A stored
+/// candidate no meter could hold (one already seen `confirmations` times, or a DIA of 0) is
+/// dropped: that one must be measured `confirmations` times again.
+#[test]
+fn a_stored_meter_comes_back_as_it_was_and_an_impossible_candidate_is_dropped() {
+    let mut meter = StretchMeter::new(StretchConfig::new(3000)).unwrap(); // 2 confirmations
+    assert_eq!(meter.measure(0), Measurement::Implausible { dia: 0 });
+    assert_eq!(meter.end(), None);
+    assert_eq!(meter.end(), None);
+    assert_eq!(meter.measure(2990), Measurement::Pending { dia: 2990 });
+    meter.start();
+    for _ in 0..2990 {
+        meter.pulse();
+    }
+    let text = serde_json::to_string(&meter).unwrap();
+    let mut stored: StretchMeter = serde_json::from_str(&text).unwrap();
+    assert_eq!(stored, meter);
+    assert_eq!(
+        (
+            stored.measurements(),
+            stored.rejected(),
+            stored.orphan_ends()
+        ),
+        (2, 1, 2)
+    );
+    // The count that was running when power failed ends the measurement it belongs to, and
+    // confirms the candidate.
+    assert_eq!(stored.end(), Some(Measurement::Accepted { dia: 2990 }));
+
+    let value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(value["candidate"], serde_json::json!([2990, 1]));
+    for bad in [
+        serde_json::json!([2990, 2]),
+        serde_json::json!([2990, 255]),
+        serde_json::json!([0, 1]),
+    ] {
+        let mut v = value.clone();
+        v["candidate"] = bad.clone();
+        let mut m: StretchMeter = serde_json::from_value(v).unwrap();
+        assert_eq!(
+            serde_json::to_value(&m).unwrap()["candidate"],
+            serde_json::Value::Null,
+            "{bad}"
+        );
+        assert_eq!(m.end(), Some(Measurement::Pending { dia: 2990 }), "{bad}");
+        assert_eq!(m.dia(), 3000);
+    }
 }

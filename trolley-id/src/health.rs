@@ -409,6 +409,75 @@ mod tests {
         assert_eq!(h.totals().disagreements, 1);
     }
 
+    /// A passage with a word above the 13 cams counts once as faulty, in the window and in the
+    /// totals, whatever else it showed; the window forgets it, the totals do not.
+    #[test]
+    fn faulty_words_count_once_per_passage() {
+        let limits = AlarmLimits {
+            min_passages: 2,
+            ..AlarmLimits::default()
+        };
+        let mut h: ReaderHealth<2> = ReaderHealth::new(limits).unwrap();
+        let faulty = |words: u16| Passage {
+            faulty_words: words,
+            ..passage(false, 0, false)
+        };
+        h.record(&faulty(3));
+        h.record(&faulty(0));
+        let once = HealthStats {
+            passages: 2,
+            faulty_words: 1,
+            ..HealthStats::default()
+        };
+        assert_eq!(h.window(), once);
+        assert_eq!(h.totals(), once);
+        // Only the faulty flag: no parity error, no-read or disagreement is counted with it.
+        h.record(&Passage {
+            parity_errors: 1,
+            ..faulty(1)
+        });
+        assert_eq!(
+            h.window(),
+            HealthStats {
+                passages: 2,
+                parity_errors: 1,
+                faulty_words: 1,
+                ..HealthStats::default()
+            }
+        );
+        h.record(&faulty(0));
+        h.record(&faulty(0));
+        assert_eq!(h.window().faulty_words, 0);
+        assert_eq!(h.totals().faulty_words, 2);
+        assert_eq!(h.totals().passages, 5);
+    }
+
+    /// `alarms_raised` counts every time the alarm went on, not whether it is on; `reset`
+    /// starts it again from 0.
+    #[test]
+    fn alarms_raised_counts_every_raise_until_reset() {
+        let limits = AlarmLimits {
+            no_read_per_mille: 200,
+            disagreement_per_mille: 1000,
+            min_passages: 1,
+        };
+        let mut h: ReaderHealth<2> = ReaderHealth::new(limits).unwrap();
+        assert_eq!(h.alarms_raised(), 0);
+        for raise in 1..=3 {
+            assert_eq!(h.record(&no_read()), Some(AlarmChange::Raised));
+            assert_eq!(h.alarms_raised(), raise);
+            h.record(&passage(false, 0, false));
+            assert_eq!(
+                h.record(&passage(false, 0, false)),
+                Some(AlarmChange::Cleared)
+            );
+            assert_eq!(h.alarms_raised(), raise);
+        }
+        h.reset();
+        assert_eq!(h.alarms_raised(), 0);
+        assert!(!h.alarm());
+    }
+
     #[test]
     fn alarm_raises_above_limit_and_clears_at_half() {
         let limits = AlarmLimits {

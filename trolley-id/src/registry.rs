@@ -206,12 +206,14 @@ mod tests {
         assert!(r.is_empty());
         assert_eq!(r.assign(id(1), 10), None);
         assert_eq!(r.assign(id(4095), 20), None);
+        assert!(!r.is_empty());
         assert_eq!(r.assign(id(1), 11), Some(10));
         assert_eq!(r.len(), 2);
         assert_eq!(r.destination(id(1)), Some(&11));
         assert_eq!(r.release(id(1)), Some(11));
         assert_eq!(r.release(id(1)), None);
         assert_eq!(r.len(), 1);
+        assert!(!r.is_empty());
         assert_eq!(r.iter().collect::<Vec<_>>(), [(id(4095), &20)]);
         r.clear();
         assert!(r.is_empty());

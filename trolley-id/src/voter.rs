@@ -524,6 +524,19 @@ mod tests {
         assert!(p.disagreement);
     }
 
+    /// Readings that saw cams but none decoded (parity errors, faulty words) are a no-read
+    /// for want of agreement, not "no cams": a trolley was there.
+    #[test]
+    fn cams_without_a_decode_are_no_agreement_not_no_cams() {
+        let mut v = Voter::new(Strategy::Consecutive { k: 1 }).unwrap();
+        let p = v.vote(&[0, 0x0001, 0]);
+        assert_eq!(p.verdict, Verdict::NoRead(NoRead::NoAgreement));
+        assert_eq!((p.no_cams, p.parity_errors), (2, 1));
+        let p = v.vote(&[0xE000]);
+        assert_eq!(p.verdict, Verdict::NoRead(NoRead::NoAgreement));
+        assert_eq!(p.faulty_words, 1);
+    }
+
     #[test]
     fn empty_passage_is_no_cams() {
         for s in [
@@ -600,6 +613,25 @@ mod tests {
                 Verdict::Identified(id(3))
             );
         }
+    }
+
+    /// Parity errors can swing the bitwise majority to a trolley that valid reads show less
+    /// often than another: 3 read twice, 5 once, and two misreads of 5 (0b1101, one cam too
+    /// many) make the majority word 5. The readings support 3 more than 5: a no-read.
+    #[test]
+    fn majority_refuses_a_trolley_another_was_read_more_often_than() {
+        let mut v = Voter::new(Strategy::Majority { min_samples: 3 }).unwrap();
+        let (three, five, misread) = (encode(id(3)), encode(id(5)), 0b1101);
+        assert_eq!(decode(misread), Err(ReadError::Parity { raw: misread }));
+        let p = v.vote(&[three, three, five, misread, misread]);
+        assert_eq!(
+            p.verdict,
+            Verdict::NoRead(NoRead::Unsupported { majority: id(5) })
+        );
+        assert_eq!(p.parity_errors, 2);
+        // As often as the other is enough: 3 and 5 twice each, the misread deciding the bits.
+        let p = v.vote(&[three, three, five, five, misread]);
+        assert_eq!(p.verdict, Verdict::Identified(id(5)));
     }
 
     #[test]
