@@ -103,11 +103,11 @@ pub fn parse_fault(s: &str) -> Result<Fault, String> {
     };
     if parts.len() != 3 + wanted {
         return Err(format!(
-            "'{s}': {kind} takes the time HH:MM:SS and then {wanted} argument{}, got {} part{} \
-             after the '@'; expected {FAULT_SYNTAX}",
+            "'{s}': {kind} takes the time HH:MM:SS and then {wanted} argument{}: {} parts after \
+             the '@' separated by ':', got {}; expected {FAULT_SYNTAX}",
             if wanted == 1 { "" } else { "s" },
+            3 + wanted,
             parts.len(),
-            if parts.len() == 1 { "" } else { "s" },
         ));
     }
     let at_ms = parse_time(&parts[..3].join(":")).map_err(|e| format!("'{s}': {e}"))?;
