@@ -19,14 +19,14 @@ fn sorter(args: &[&str]) -> std::process::Output {
 }
 
 const EVERY_FAULT: [&str; 8] = [
-    "--fault=misread@00:05:R5:0.02",
-    "--fault=reader-fails@00:20:R8",
-    "--fault=noise@00:02:P1:0.001",
-    "--fault=stuck@00:10:full-E3:1:300",
-    "--fault=chatter@00:10:waiting-D1:300",
-    "--fault=power@00:25:30",
-    "--fault=hang@00:35:5",
-    "--fault=pulses@00:40:2:0.05:300",
+    "--fault=misread@00:05:00:R5:0.02",
+    "--fault=reader-fails@00:20:00:R8",
+    "--fault=noise@00:02:00:P1:0.001",
+    "--fault=stuck@00:10:00:full-E3:1:300",
+    "--fault=chatter@00:10:00:waiting-D1:300",
+    "--fault=power@00:25:00:30",
+    "--fault=hang@00:35:00:5",
+    "--fault=pulses@00:40:00:2:0.05:300",
 ];
 
 #[test]
@@ -95,7 +95,7 @@ fn a_short_run_with_every_fault_keeps_every_sack() {
 
 #[test]
 fn the_summary_names_both_readings_and_shows_no_debug_text() {
-    let out = sorter(&["--hours", "0.5", "--quiet", "--fault", "hang@00:10:2"]);
+    let out = sorter(&["--hours", "0.5", "--quiet", "--fault", "hang@00:10:00:2"]);
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(
@@ -113,8 +113,11 @@ fn bad_arguments_are_refused_naming_the_option() {
     for (args, needles) in [
         (&["--hours", "0"][..], &["--hours", "got 0"][..]),
         (&["--fault", "nonsense"], &["--fault", "nonsense"]),
-        (&["--fault", "misread@01:00:R13:0.1"], &["--fault", "R13"]),
-        (&["--fault", "power@25:99:10"], &["--fault", "time"]),
+        (
+            &["--fault", "misread@01:00:00:R13:0.1"],
+            &["--fault", "R13"],
+        ),
+        (&["--fault", "power@25:99:00:10"], &["--fault", "time"]),
         (&["--script", script], &["--script", "line 2", "post type"]),
         (
             &["--script", "/nonexistent/script"],

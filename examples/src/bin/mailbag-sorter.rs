@@ -36,17 +36,22 @@ struct Args {
     hours: f64,
     /// Whole plant: a script of operators' entries, lines `HH:MM[:SS] PANEL COMMAND ARGS`
     /// (`P1 type 3`, `P2 postcode 20211`, `central assign 3 E2`, `central schedule 2|calendar`,
-    /// `A emptying D1 A1,A2`, `B lamptest`), `#` comments, and `replace` alone to leave the
-    /// seeded traffic out.
+    /// `A emptying D1 A1,A2`, `B emptying E9 B1,C2`, `B lamptest`), `#` comments, and `replace`
+    /// alone to leave the seeded traffic out. A line a panel's keyboard would not take (a
+    /// command or station not of that panel, a postcode with a bin in no schedule, an extra
+    /// word) is refused with its line number.
     #[arg(long, value_name = "FILE")]
     script: Option<std::path::PathBuf>,
     /// Whole plant: a fault at a simulated time, repeatable: `misread@T:READER:RATE`,
-    /// `reader-fails@T:READER`, `noise@T:PANEL:BIT_ERROR_RATE`, `stuck@T:INPUT:0|1[:SECONDS]`,
-    /// `chatter@T:INPUT[:SECONDS]`, `power@T:SECONDS`, `hang@T[:SECONDS]`,
-    /// `pulses@T:DOCK:RATE[:SECONDS]`; T is `HH:MM[:SS]` (hours past 23 for later days), READER
-    /// R1–R12, PANEL P1–P3, A, B or central, INPUT a name (full-E3, waiting-D1, present-R5,
-    /// pulse-1, ref-end-2) or 0–543, DOCK 1–3.
-    #[arg(long, value_name = "KIND@TIME[:ARGS]", value_parser = parse_fault)]
+    /// `reader-fails@T:READER`, `noise@T:PANEL:BIT_ERROR_RATE`, `stuck@T:INPUT:0|1:SECONDS`,
+    /// `chatter@T:INPUT:SECONDS`, `power@T:SECONDS`, `hang@T:SECONDS`,
+    /// `pulses@T:DOCK:RATE:SECONDS`; T is always `HH:MM:SS` (hours past 23 for later days),
+    /// then exactly the kind's arguments (a missing or extra one is refused); READER R1–R12,
+    /// PANEL P1–P3, A, B or central, INPUT a name (full-E3, waiting-D1, present-R5, pulse-1,
+    /// ref-end-2) or 0–543, DOCK 1–3, RATE 0 to 0.5, SECONDS 1 to 604800 (7 days; 0 with stuck
+    /// and pulses: for good). A power failure (a hang) that starts before the one before it is
+    /// over is refused.
+    #[arg(long, value_name = "KIND@HH:MM:SS:ARGS", value_parser = parse_fault)]
     fault: Vec<mailbag::plant::faults::Fault>,
     /// Whole plant: trolleys (1 to 4095).
     #[arg(long, default_value_t = 3000, value_parser = cli::whole(1u16, 4095u16))]
@@ -204,17 +209,18 @@ fn main() -> ExitCode {
 
 fn run_plant(args: &Args) -> Result<(), Stop> {
     use mailbag::plant::{self, panels::Panels};
+    plant::faults::check_faults(&args.fault).map_err(|e| cli::bad("--fault", e))?;
     let script = match &args.script {
         None => None,
         Some(path) => {
-            let text = std::fs::read_to_string(path).map_err(|e| {
+            let bytes = std::fs::read(path).map_err(|e| {
                 cli::bad(
                     "--script",
                     format!("{}: {}", path.display(), cli::io_message(&e)),
                 )
             })?;
             Some(
-                plant::traffic::parse_script(&text)
+                plant::traffic::parse_script_bytes(&bytes)
                     .map_err(|e| cli::bad("--script", format!("{}: {e}", path.display())))?,
             )
         }

@@ -177,12 +177,12 @@ pub fn run_one(
                 FaultKind::Stuck { point, on, secs } => {
                     field.faults.stuck.push((point, on));
                     if secs > 0 {
-                        ends.push((wall_ms + secs * 1000, Ending::Stuck(point)));
+                        ends.push((after(wall_ms, secs), Ending::Stuck(point)));
                     }
                 }
                 FaultKind::Chatter { point, secs } => {
                     field.faults.chatter.push(point);
-                    ends.push((wall_ms + secs * 1000, Ending::Chatter(point)));
+                    ends.push((after(wall_ms, secs), Ending::Chatter(point)));
                 }
                 FaultKind::Power { secs } => {
                     if power_until.is_none() {
@@ -195,19 +195,19 @@ pub fn run_one(
                                 .collect::<Vec<_>>(),
                             control.meters.clone(),
                         ));
-                        power_until = Some(wall_ms + secs * 1000);
+                        power_until = Some(after(wall_ms, secs));
                         control.print(format!("{} power failure", stamp(wall_ms)));
                     }
                 }
                 FaultKind::Hang { secs } => {
                     if hang.is_none() {
-                        hang = Some((wall_ms, wall_ms + secs * 1000, false));
+                        hang = Some((wall_ms, after(wall_ms, secs), false));
                     }
                 }
                 FaultKind::MissedPulses { dock, rate, secs } => {
                     field.faults.missed_pulse[dock] = rate;
                     if secs > 0 {
-                        ends.push((wall_ms + secs * 1000, Ending::Pulses(dock)));
+                        ends.push((after(wall_ms, secs), Ending::Pulses(dock)));
                     }
                 }
             }
@@ -433,4 +433,10 @@ pub fn schedule_at(start: DateTime, ms: u64) -> u8 {
         left -= step;
     }
     schedule_for(&t)
+}
+
+/// `secs` seconds after `wall_ms`, saturating (a fault's end never wraps; `--fault` bounds the
+/// seconds anyway: [`super::faults::MAX_FAULT_SECONDS`]).
+fn after(wall_ms: u64, secs: u64) -> u64 {
+    wall_ms.saturating_add(secs.saturating_mul(1000))
 }

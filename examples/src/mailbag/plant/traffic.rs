@@ -224,16 +224,42 @@ pub(super) fn num<T: std::str::FromStr>(s: Option<&&str>, what: &str) -> Result<
 }
 
 /// Parses a script. Lines: `HH:MM[:SS] PANEL COMMAND ARGS`, `#` comments, blank lines, and
-/// `replace` alone (the seeded workload is left out). Commands:
-/// - `P1|P2|P3 type N` (a sack of post type 0–13), `P1|P2 postcode NNNNN`;
-/// - `central assign TYPE LANE` (lane 1–15 as D1–D4, E1–E11, or its name), `central schedule
-///   N|calendar` (N 1–6);
-/// - `A|B emptying LANE STATIONS` (stations as letters-and-digits `A1,A3`);
+/// `replace` alone (the seeded workload is left out). Commands, each with exactly the
+/// arguments shown (an extra word is refused), at the panels whose keyboards take them (the
+/// same rules as [`super::panels::keyboard`]):
+/// - `P1|P2|P3 type N` (a sack of post type 0–13), `P1|P2 postcode NNNNN` (a postcode that has
+///   a bin in at least one sorting schedule: one of the catalogue's 300);
+/// - `central assign TYPE LANE` (lane D1–D4 or E1–E11), `central schedule N|calendar` (N 1–6);
+/// - `A emptying LANE STATIONS` (stations of panel A: `A1,A3`), `B emptying LANE STATIONS`
+///   (stations of panel B: B1, B2, C1, C2);
 /// - any panel: `lamptest`.
 ///
 /// # Errors
 /// `line N: …` for the first bad line.
 pub fn parse_script(text: &str) -> Result<Script, String> {
+    parse_lines(text)
+}
+
+/// [`parse_script`] on a file's bytes: text that is not UTF-8 is refused naming the first line
+/// that is not.
+///
+/// # Errors
+/// `line N: …` for the first bad line.
+pub fn parse_script_bytes(bytes: &[u8]) -> Result<Script, String> {
+    match std::str::from_utf8(bytes) {
+        Ok(text) => parse_lines(text),
+        Err(e) => {
+            let line = bytes[..e.valid_up_to()]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count()
+                + 1;
+            Err(format!("line {line}: not UTF-8 text"))
+        }
+    }
+}
+
+fn parse_lines(text: &str) -> Result<Script, String> {
     let mut script = Script::default();
     for (i, line) in text.lines().enumerate() {
         let line = line.split('#').next().unwrap_or("").trim();
@@ -261,6 +287,18 @@ fn parse_line(line: &str, script: &mut Script) -> Result<(), String> {
     let panel = parse_panel(words.get(1).ok_or("panel missing")?)?;
     let command = words.get(2).ok_or("command missing")?.to_ascii_lowercase();
     let args = &words[3..];
+    let wanted = match command.as_str() {
+        "lamptest" => 0,
+        "type" | "postcode" | "schedule" => 1,
+        "assign" | "emptying" => 2,
+        _ => args.len(), // no such command: refused below
+    };
+    if args.len() > wanted {
+        return Err(format!(
+            "too many words: '{command}' takes {wanted}, got '{}'",
+            args.join(" ")
+        ));
+    }
     let keyed = |command| Keyed {
         at_ms,
         panel,
@@ -282,6 +320,9 @@ fn parse_line(line: &str, script: &mut Script) -> Result<(), String> {
             let code: u32 = num(args.first(), "postcode")?;
             if !(10_000..=99_999).contains(&code) {
                 return Err(format!("postcode must have five digits, got {code}"));
+            }
+            if (0..SCHEDULES).all(|s| bin_for(s, code).is_none()) {
+                return Err(format!("postcode {code} has a bin in no sorting schedule"));
             }
             script.sacks.push(SackArrival {
                 at_ms,
@@ -314,12 +355,21 @@ fn parse_line(line: &str, script: &mut Script) -> Result<(), String> {
         }
         (PanelId::A | PanelId::B, "emptying") => {
             let lane = lane_number(args.first().ok_or("lane missing")?)?;
+            let (mine, names) = if panel == PanelId::A {
+                (0..3, "A1–A3")
+            } else {
+                (3..7, "B1, B2, C1 or C2")
+            };
             let mut stations = 0u8;
             for name in args.get(1).ok_or("stations missing")?.split(',') {
-                let s = (0..7)
+                let s = mine
+                    .clone()
                     .find(|&s| super::operator::station_name(s).eq_ignore_ascii_case(name))
                     .ok_or_else(|| {
-                        format!("station must be A1–A3, B1–B2 or C1–C2, got '{name}'")
+                        format!(
+                            "a station of panel {} must be {names}, got '{name}'",
+                            panel.name()
+                        )
                     })?;
                 stations |= 1 << s;
             }
@@ -329,9 +379,6 @@ fn parse_line(line: &str, script: &mut Script) -> Result<(), String> {
         }
         (_, "lamptest") => script.keyed.push(keyed(Command::LampTest)),
         (p, c) => return Err(format!("'{c}' is not a command of panel {}", p.name())),
-    }
-    if args.len() > 2 {
-        return Err("too many words".into());
     }
     Ok(())
 }
@@ -361,5 +408,19 @@ mod tests {
         assert_eq!(s.keyed[0].command, Command::Schedule(Some(1)));
         let e = parse_script("06:00 P1 type 3\n06:00 P3 postcode 20000\n").unwrap_err();
         assert!(e.starts_with("line 2:"), "{e}");
+        for (bad, why) in [
+            ("A emptying D1 C2", "station of panel A"),
+            ("B emptying E9 A1", "station of panel B"),
+            ("P1 postcode 12345", "no sorting schedule"),
+            ("P1 type 3 4", "too many words"),
+            ("central schedule 2 x", "too many words"),
+            ("B lamptest now", "too many words"),
+        ] {
+            let e = parse_script(&format!("# ok\n06:00 {bad}\n")).unwrap_err();
+            assert!(e.starts_with("line 2:") && e.contains(why), "{bad}: {e}");
+        }
+        let e = parse_script_bytes(b"06:00 P1 type 3\n06:01 P1 type \xff\n").unwrap_err();
+        assert_eq!(e, "line 2: not UTF-8 text");
+        assert!(parse_script("06:00 B emptying E9 B1,C2\n06:00 P2 postcode 20211\n").is_ok());
     }
 }
