@@ -320,10 +320,13 @@ impl<T: Item, const N: usize> Ring<T, N> {
         }
     }
 
-    /// Starts the statistics afresh (the counters keep counting).
+    /// Starts the statistics afresh, as for a new ring: no underruns, and the least slack back
+    /// to the capacity until the next consumption (how full the ring is at the reset is not a
+    /// sample: an empty ring reset after a `clear` does not read as one that ran dry). The
+    /// counters keep counting.
     pub fn reset_stats(&mut self) {
         self.underruns = 0;
-        self.least_slack = self.held();
+        self.least_slack = Self::SLOTS;
     }
 
     /// The least slack as a `usize` (it is at most `N`).
@@ -401,7 +404,7 @@ mod tests {
     }
 
     /// The least slack keeps its meaning: the fewest items left right after a consumption, the
-    /// capacity before any, 0 after an underrun, the items held at a reset — and `clear` (no
+    /// capacity before any and again after a reset, 0 after an underrun — and `clear` (no
     /// consumption) does not move it.
     #[test]
     fn least_slack_is_the_fewest_left_after_a_consumption() {
@@ -431,9 +434,9 @@ mod tests {
             (ring.stats().least_slack, ring.stats().most_requests),
             (2, 2)
         );
-        // A reset starts from what is held now.
+        // A reset starts afresh, as a new ring: the capacity until the next consumption.
         ring.reset_stats();
-        assert_eq!(ring.stats().least_slack, 3);
+        assert_eq!(ring.stats().least_slack, 4);
         assert_eq!(ring.next(), Some(3));
         assert_eq!(ring.stats().least_slack, 2);
         for _ in 0..2 {

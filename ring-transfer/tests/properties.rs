@@ -91,7 +91,7 @@ fn ring_matches_the_model<const N: usize>(ops: &[RingOp]) -> Result<(), TestCase
             }
             RingOp::ResetStats => {
                 underruns = 0;
-                least = model.len();
+                least = N;
                 ring.reset_stats();
             }
         }
@@ -643,4 +643,37 @@ fn the_sources_numbers() {
     assert!(capacity::max_slaves(machine, link, 500).unwrap() >= 80);
     let report = capacity::check(&[machine; 100], link).unwrap();
     assert!(!report.is_schedulable());
+}
+
+/// The attack on the rewritten ring (issue 23): `reset_stats` took how full the ring was at the
+/// reset as a sample, so an empty ring reset after a `clear` read "least slack 0, N requests"
+/// with no underrun, and a low no consumption since the reset had produced was reported.
+#[test]
+fn a_reset_starts_the_statistics_as_for_a_new_ring() {
+    use regler_ring_transfer::Stats;
+    let mut ring: Ring<u8, 3> = Ring::new();
+    ring.reset_stats();
+    assert_eq!(
+        ring.stats(),
+        Stats {
+            underruns: 0,
+            least_slack: 3,
+            most_requests: 0
+        }
+    );
+    let mut ring: Ring<u8, 4> = Ring::new();
+    ring.receive(1).unwrap();
+    ring.reset_stats();
+    for b in 2..=4 {
+        ring.receive(b).unwrap();
+    }
+    assert_eq!(ring.next(), Some(1));
+    let s = ring.stats();
+    assert_eq!((s.least_slack, s.most_requests), (3, 1));
+    let mut ring: Ring<u8, 4> = Ring::new();
+    ring.receive(1).unwrap();
+    ring.receive(2).unwrap();
+    ring.reset_stats();
+    let s = ring.stats();
+    assert_eq!((s.least_slack, s.most_requests), (4, 0));
 }
