@@ -62,7 +62,8 @@
 //!
 //! # Faults and tallies
 //! `--fault` ([`faults::FAULT_SYNTAX`]); every sack loaded is delivered, misdelivered, rejected
-//! or still in the plant, counted place by place and checked every simulated minute.
+//! or still in the plant, counted place by place and checked every simulated minute — through
+//! power failures and hangs too — and at the end of a partial last minute.
 //!
 //! # CPU load
 //! The executive measures each cycle's busy time on a clock that the program's routines advance
@@ -159,10 +160,11 @@ impl Config {
         (sacks, keyed)
     }
 
-    /// Simulated minutes of the run (the progress bar counts them, for both runs).
+    /// Simulated minutes of the run, a partial last one counted (the tally is checked at each,
+    /// and the progress bar counts them, for both runs).
     #[must_use]
     pub fn minutes(&self) -> u64 {
-        (self.hours * 60.0) as u64
+        ((self.hours * 3_600_000.0).round() as u64).div_ceil(60_000)
     }
 }
 

@@ -121,6 +121,8 @@ const ALARM_LIMITS: AlarmLimits = AlarmLimits {
     disagreement_per_mille: 10,
     min_passages: 200,
 };
+/// `minute_seen` before the first cycle.
+const MINUTE_UNSEEN: u8 = 255;
 /// Scans of a standing trolley taken at a desk for one entry.
 const DESK_SCANS: u8 = 5;
 /// Trolleys per emptying portion.
@@ -272,7 +274,7 @@ impl Control {
             alarms_raised: 0,
             recalibrations: 0,
             passages: 0,
-            minute_seen: 255,
+            minute_seen: MINUTE_UNSEEN,
             hour_loaded: [0; DESKS],
         }
     }
@@ -339,7 +341,13 @@ impl Control {
         c.spend(cost::IO_US + 20 * cost::TEST_US);
         let _ = scan.outputs.set(io::DRIVES, true);
         if c.calendar.minute() != c.minute_seen {
+            // The first cycle only notes the minute: the schedule in force at the start is set
+            // at start-up, and the statistics are printed at a midnight *after* the start.
+            let first = c.minute_seen == MINUTE_UNSEEN;
             c.minute_seen = c.calendar.minute();
+            if first {
+                return;
+            }
             c.spend(cost::CALENDAR_US);
             let mut due = Vec::new();
             let now = c.calendar;
