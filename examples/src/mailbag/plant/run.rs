@@ -76,7 +76,7 @@ pub struct ReaderFigures {
     pub no_reads: u32,
     /// Passages with two different numbers decoded.
     pub disagreements: u32,
-    /// Alarm on at the end.
+    /// Alarm on at the end (the reader's health, or its presence input found faulty).
     pub alarm: bool,
     /// Alarms raised.
     pub alarms_raised: u32,
@@ -240,124 +240,124 @@ pub fn run_one(
         // The tick's work; a power failure or a hang ends it early (`break 'tick`), the
         // tally is checked after it all the same.
         'tick: {
-        if let Some(until) = power_until {
-            if wall_ms < until {
-                break 'tick; // everything stands; the calendar runs on its battery clock
-            }
-            power_until = None;
-            if let Some((snapshots, meters)) = stored.take() {
-                for (d, (snapshot, meter)) in snapshots.iter().zip(meters).enumerate() {
-                    let sa: [u32; BINS_PER_DOCK] =
-                        std::array::from_fn(|j| chain::bin_sa(j) - chain::LEAD_PULSES);
-                    let table = DistanceTable::new(chain::SIA, &sa).map_err(|e| e.to_string())?;
-                    let mut tracker =
-                        DockTracker::new(table, SOURCE_HOLD_PULSES).map_err(|e| e.to_string())?;
-                    let (meter, _) = start_up(
-                        &mut tracker,
-                        Some(snapshot),
-                        Some(meter),
-                        StretchConfig::new(chain::SIA),
-                    )
-                    .map_err(|e| e.to_string())?;
-                    control.trackers[d] = tracker;
-                    control.meters[d] = meter;
+            if let Some(until) = power_until {
+                if wall_ms < until {
+                    break 'tick; // everything stands; the calendar runs on its battery clock
                 }
+                power_until = None;
+                if let Some((snapshots, meters)) = stored.take() {
+                    for (d, (snapshot, meter)) in snapshots.iter().zip(meters).enumerate() {
+                        let sa: [u32; BINS_PER_DOCK] =
+                            std::array::from_fn(|j| chain::bin_sa(j) - chain::LEAD_PULSES);
+                        let table =
+                            DistanceTable::new(chain::SIA, &sa).map_err(|e| e.to_string())?;
+                        let mut tracker = DockTracker::new(table, SOURCE_HOLD_PULSES)
+                            .map_err(|e| e.to_string())?;
+                        let (meter, _) = start_up(
+                            &mut tracker,
+                            Some(snapshot),
+                            Some(meter),
+                            StretchConfig::new(chain::SIA),
+                        )
+                        .map_err(|e| e.to_string())?;
+                        control.trackers[d] = tracker;
+                        control.meters[d] = meter;
+                    }
+                }
+                exec.resume(Restart::WhereStopped);
+                power_back_ms = wall_ms;
+                power_failures += 1;
+                control.print(format!(
+                    "{} power back, resumed where stopped",
+                    stamp(wall_ms)
+                ));
             }
-            exec.resume(Restart::WhereStopped);
-            power_back_ms = wall_ms;
-            power_failures += 1;
-            control.print(format!(
-                "{} power back, resumed where stopped",
-                stamp(wall_ms)
-            ));
-        }
 
-        // Level A, every 10 ms: the panel links, the field, the input flip-flops.
-        desks.tick_10ms(wall_ms, &mut |panel, command| {
-            control.commands.push_back((panel, command))
-        });
-        let mut capture = [0u16; IW];
-        field.advance(&mut capture);
-        if capture.iter().any(|&w| w != 0) {
-            exec.capture(&capture);
-        }
-        while let Some(k) = keyed.get(next_key).filter(|k| k.at_ms <= wall_ms) {
-            next_key += 1;
-            desks.type_in(k.panel, k.command);
-        }
-        while let Some(s) = sacks.get(next_sack).filter(|s| s.at_ms <= wall_ms) {
-            next_sack += 1;
-            desk_sacks[usize::from(s.desk.min(2))].push_back(*s);
-        }
-        for p in 0..DESKS {
-            match operators[p] {
-                Operator::Idle => {
-                    if field.desk_ready(p) && !field.release_open(p) {
-                        if let Some(sack) = desk_sacks[p].pop_front() {
-                            desks.type_in(PanelId::Desk(p as u8), sack.entry);
-                            operators[p] = Operator::Typed {
-                                at_ms: field.now_ms,
-                            };
+            // Level A, every 10 ms: the panel links, the field, the input flip-flops.
+            desks.tick_10ms(wall_ms, &mut |panel, command| {
+                control.commands.push_back((panel, command))
+            });
+            let mut capture = [0u16; IW];
+            field.advance(&mut capture);
+            if capture.iter().any(|&w| w != 0) {
+                exec.capture(&capture);
+            }
+            while let Some(k) = keyed.get(next_key).filter(|k| k.at_ms <= wall_ms) {
+                next_key += 1;
+                desks.type_in(k.panel, k.command);
+            }
+            while let Some(s) = sacks.get(next_sack).filter(|s| s.at_ms <= wall_ms) {
+                next_sack += 1;
+                desk_sacks[usize::from(s.desk.min(2))].push_back(*s);
+            }
+            for p in 0..DESKS {
+                match operators[p] {
+                    Operator::Idle => {
+                        if field.desk_ready(p) && !field.release_open(p) {
+                            if let Some(sack) = desk_sacks[p].pop_front() {
+                                desks.type_in(PanelId::Desk(p as u8), sack.entry);
+                                operators[p] = Operator::Typed {
+                                    at_ms: field.now_ms,
+                                };
+                            }
+                        }
+                    }
+                    Operator::Typed { at_ms } => {
+                        if field.release_open(p) {
+                            if let Some(dest) = control.accepted[p].take() {
+                                field.load(p, dest);
+                                operators[p] = Operator::Idle;
+                            }
+                        } else if field.now_ms > at_ms + 6_000 {
+                            operators[p] = Operator::Idle; // refused: the sack goes back
                         }
                     }
                 }
-                Operator::Typed { at_ms } => {
-                    if field.release_open(p) {
-                        if let Some(dest) = control.accepted[p].take() {
-                            field.load(p, dest);
-                            operators[p] = Operator::Idle;
-                        }
-                    } else if field.now_ms > at_ms + 6_000 {
-                        operators[p] = Operator::Idle; // refused: the sack goes back
+            }
+
+            // The watchdog, checked every 10 ms; a hung program runs no cycle.
+            if let Some((from, until, tripped)) = hang {
+                if wall_ms >= until {
+                    if tripped {
+                        exec.reset_watchdog();
+                        control.print(format!(
+                            "{} watchdog reset, program restarted",
+                            stamp(wall_ms)
+                        ));
+                    }
+                    hang = None;
+                } else {
+                    if !tripped && exec.check_watchdog(&mut field) {
+                        // A hang that began during a power failure counts from the power's return.
+                        let since = from.max(power_back_ms);
+                        watchdog_safe_ms = watchdog_safe_ms.max(wall_ms.saturating_sub(since));
+                        hang = Some((from, until, true));
+                    }
+                    break 'tick;
+                }
+            }
+            exec.check_watchdog(&mut field);
+
+            if wall_ms.is_multiple_of(50) {
+                let (lanes, stations) = field.fills();
+                let ready = std::array::from_fn(|p| field.desk_ready(p));
+                control.show_field(ready, &lanes, &stations);
+                let _ = exec.cycle(&mut field, |scan| steps.run(scan, &mut control));
+                field.emptying = control.emptying;
+                desks.refresh(&control.live);
+                if teletype_free_ms <= wall_ms {
+                    let reserve_cost = Rc::clone(&cost);
+                    let mut started_job = None;
+                    exec.reserve(&mut field, &mut control.spool, 0, |job| {
+                        started_job = Some(job.0);
+                        reserve_cost.set(1_000_000); // the reserve now waits on the teletype
+                    });
+                    if let Some(line) = started_job {
+                        teletype_free_ms = wall_ms + (line.len() as u64 + 2) * TELETYPE_MS_PER_CHAR;
+                        printed.push(line);
                     }
                 }
             }
-        }
-
-        // The watchdog, checked every 10 ms; a hung program runs no cycle.
-        if let Some((from, until, tripped)) = hang {
-            if wall_ms >= until {
-                if tripped {
-                    exec.reset_watchdog();
-                    control.print(format!(
-                        "{} watchdog reset, program restarted",
-                        stamp(wall_ms)
-                    ));
-                }
-                hang = None;
-            } else {
-                if !tripped && exec.check_watchdog(&mut field) {
-                    // A hang that began during a power failure counts from the power's return.
-                    let since = from.max(power_back_ms);
-                    watchdog_safe_ms = watchdog_safe_ms.max(wall_ms.saturating_sub(since));
-                    hang = Some((from, until, true));
-                }
-                break 'tick;
-            }
-        }
-        exec.check_watchdog(&mut field);
-
-        if wall_ms.is_multiple_of(50) {
-            let (lanes, stations) = field.fills();
-            let ready = std::array::from_fn(|p| field.desk_ready(p));
-            control.show_field(ready, &lanes, &stations);
-            let _ = exec.cycle(&mut field, |scan| steps.run(scan, &mut control));
-            field.emptying = control.emptying;
-            desks.refresh(&control.live);
-            if teletype_free_ms <= wall_ms {
-                let reserve_cost = Rc::clone(&cost);
-                let mut started_job = None;
-                exec.reserve(&mut field, &mut control.spool, 0, |job| {
-                    started_job = Some(job.0);
-                    reserve_cost.set(1_000_000); // the reserve now waits on the teletype
-                });
-                if let Some(line) = started_job {
-                    teletype_free_ms = wall_ms + (line.len() as u64 + 2) * TELETYPE_MS_PER_CHAR;
-                    printed.push(line);
-                }
-            }
-        }
-
         }
 
         if wall_ms.is_multiple_of(60_000) || wall_ms >= total_ms {
@@ -370,13 +370,14 @@ pub fn run_one(
     let readers = control
         .health
         .iter()
-        .map(|h| {
+        .enumerate()
+        .map(|(r, h)| {
             let t = h.totals();
             ReaderFigures {
                 passages: t.passages,
                 no_reads: t.no_reads,
                 disagreements: t.disagreements,
-                alarm: h.alarm(),
+                alarm: h.alarm() || control.presence_fault(r),
                 alarms_raised: h.alarms_raised(),
             }
         })
