@@ -68,7 +68,8 @@ pub struct RunFigures {
     pub busiest_cycle_ms: f64,
     /// Watchdog trips.
     pub watchdog_trips: u32,
-    /// Longest time from a hang to safe outputs, ms.
+    /// Longest time from a hang's start (or the power's return, for a hang begun during a
+    /// power failure) to safe outputs, ms: at most 100.
     pub watchdog_safe_ms: u64,
     /// Power failures survived.
     pub power_failures: u32,

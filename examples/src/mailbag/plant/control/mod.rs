@@ -3,6 +3,11 @@
 //! emptying, the calendar — with the timer shift register ([`TimerQueue`]) for timed sequences
 //! and time supervision, and the teletype's [`Spool`].
 //!
+//! A switch is set for the passage judged and goes back to its safe position (the manual
+//! station) on the timer queue once that trolley has passed; presence inputs, the trolleys
+//! routed toward a reader and the lanes' exits toward R9 are supervised (the plant's module
+//! docs, "Switches and supervision").
+//!
 //! Each routine adds its cost in simulated µs to the cycle ([`cost`]): the executive measures
 //! the cycle's busy time on that clock, as the source's idle counter measured its load.
 
