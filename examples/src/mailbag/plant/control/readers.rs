@@ -5,7 +5,7 @@ use regler_scan_cycle::Scan;
 use regler_trolley_id::{NoRead, Passage, Route, TrolleyId, Verdict, decode};
 
 use super::super::layout::{
-    BINS_PER_DOCK, Dest, EXITS, R_CHAIN, R_EMPTYING, READER_NAMES, exit_toward, io,
+    BINS_PER_DOCK, Dest, EXITS, R_CHAIN, R_EMPTYING, R_MAIN, READER_NAMES, exit_toward, io,
 };
 use super::{
     Control, IW, OW, PORTION, PRESENCE_LIMIT_CYCLES, Reading, SUPERVISE_TICKS, SWITCH_HOLD_TICKS,
@@ -88,8 +88,13 @@ impl Control {
         self.presence_fault[r] = on;
         let text = if on {
             self.supervision_faults += 1;
+            let what = if r < R_MAIN {
+                "on without a trolley's code: input faulty, alarm raised"
+            } else {
+                "on too long: input faulty, alarm raised, switch safe"
+            };
             format!(
-                "{} reader {} presence input on too long: input faulty, alarm raised, switch safe",
+                "{} reader {} presence input {what}",
                 self.stamp(),
                 READER_NAMES[r]
             )
@@ -104,7 +109,9 @@ impl Control {
     }
 
     /// A reader on the rails: samples while the trolley is present, judges at the passage's
-    /// end and sets the switch toward the destination (or the reject gate).
+    /// end and sets the switch toward the destination (or the reject gate) for that passage
+    /// only: it goes back to safe once the trolley has passed. A presence input on too long is
+    /// a fault (reported, the switch safe, no passage judged until it goes off).
     pub(super) fn reader(&mut self, r: usize, scan: &mut Scan<'_, IW, OW>) {
         let present = scan.inputs.get(io::present(r));
         if present {
