@@ -224,7 +224,7 @@ proptest! {
 
 /// The point of voting, at plant level: at the source's 1 in 1000 misreads, on the same seed
 /// and traffic, voting misdelivers at least 100 times fewer sacks than parity alone. Needs
-/// some 80 000 sacks to see parity's misdeliveries at all (about 230 per million): release-sized
+/// some 80 000 sacks to see parity's misdeliveries at all (about 100 per million): release-sized
 /// (about 20 s on two free cores), so run it with
 /// `cargo test --release -p regler-examples --test mailbag_plant -- --ignored`.
 #[test]

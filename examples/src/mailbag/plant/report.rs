@@ -64,11 +64,12 @@ pub struct RunFigures {
     pub cpu_load_percent_mean: f64,
     /// Largest.
     pub cpu_load_percent_max: f64,
-    /// The longest cycle's busy time, ms (the cost model).
-    pub worst_cycle_ms: f64,
+    /// The busiest cycle's busy time, ms (the cost model).
+    pub busiest_cycle_ms: f64,
     /// Watchdog trips.
     pub watchdog_trips: u32,
-    /// Longest time from a hang to safe outputs, ms.
+    /// Longest time from a hang's start (or the power's return, for a hang begun during a
+    /// power failure) to safe outputs, ms: at most 100.
     pub watchdog_safe_ms: u64,
     /// Power failures survived.
     pub power_failures: u32,
@@ -169,7 +170,7 @@ fn figures(r: &RunResult) -> RunFigures {
         cycles: r.cycles,
         cpu_load_percent_mean: f64::from(r.busy_mean_us) / 500.0,
         cpu_load_percent_max: f64::from(r.busy_max_us) / 500.0,
-        worst_cycle_ms: f64::from(r.busy_max_us) / 1000.0,
+        busiest_cycle_ms: f64::from(r.busy_max_us) / 1000.0,
         watchdog_trips: r.watchdog_trips,
         watchdog_safe_ms: r.watchdog_safe_ms,
         power_failures: r.power_failures,
@@ -433,11 +434,11 @@ pub fn summary_text(report: &Report) -> String {
     );
     let _ = writeln!(
         s,
-        "executive                   {} cycles of 50 ms; CPU load mean {} %, max {} %; worst cycle {} ms",
+        "executive                   {} cycles of 50 ms; CPU load mean {} %, max {} %; busiest cycle {} ms busy",
         v.cycles,
         tenths(v.cpu_load_percent_mean),
         tenths(v.cpu_load_percent_max),
-        number(v.worst_cycle_ms)
+        number(v.busiest_cycle_ms)
     );
     let _ = writeln!(
         s,

@@ -1,6 +1,6 @@
 //! One run of the plant: the 10 ms loop that drives the panels, the field and, every 5th
 //! tick, the executive's cycle with the control program; faults on demand; the teletype; the
-//! tallies checked every simulated minute.
+//! tallies checked every simulated minute (through power failures and hangs) and at the end.
 
 use std::cell::Cell;
 use std::collections::VecDeque;
@@ -43,14 +43,16 @@ pub struct RunResult {
     pub cycles: u64,
     /// Mean and largest busy time of a cycle, µs (the cost model).
     pub busy_mean_us: u32,
-    /// Largest.
+    /// Largest: the busiest cycle's busy time.
     pub busy_max_us: u32,
-    /// Largest time between two cycles' starts, µs.
-    pub worst_cycle_us: u32,
     /// Watchdog trips.
     pub watchdog_trips: u32,
-    /// Longest time from a hang to the safe outputs, ms.
+    /// Longest time from a hang's start (or from the power's return, for a hang that began
+    /// during a power failure) to the safe outputs, ms: at most [`WATCHDOG_SAFE_MS`].
     pub watchdog_safe_ms: u64,
+    /// Times the tally was checked (every simulated minute, and at the end of a partial last
+    /// minute).
+    pub tally_checks: u64,
     /// Power failures survived (resumed).
     pub power_failures: u32,
     /// Teletype lines printed, and the spool's overflow.
@@ -74,7 +76,7 @@ pub struct ReaderFigures {
     pub no_reads: u32,
     /// Passages with two different numbers decoded.
     pub disagreements: u32,
-    /// Alarm on at the end.
+    /// Alarm on at the end (the reader's health, or its presence input found faulty).
     pub alarm: bool,
     /// Alarms raised.
     pub alarms_raised: u32,
@@ -85,6 +87,14 @@ enum Operator {
     Idle,
     Typed { at_ms: u64 },
 }
+
+/// The bound the plant keeps from a hang's start to the safe outputs, ms.
+pub const WATCHDOG_SAFE_MS: u64 = 100;
+
+/// The executive's watchdog limit for the plant, µs. The check runs every 10 ms and trips at the
+/// first check *more* than this after the last cycle's end, so at most 10 ms later: within
+/// [`WATCHDOG_SAFE_MS`] of the last cycle's end, and so of the hang's start.
+const WATCHDOG_LIMIT_US: u32 = 90_000;
 
 /// The teletype: 10 characters a second.
 const TELETYPE_MS_PER_CHAR: u64 = 100;
@@ -117,7 +127,10 @@ pub fn run_one(
     let dia = std::array::from_fn(|d| field.chain_dia(d));
     let mut control = Control::new(reading, Rc::clone(&cost), calendar, dia);
     let steps = Control::chain();
-    let mut exec: Executive<IW, OW> = Executive::new(CycleConfig::source());
+    let mut exec: Executive<IW, OW> = Executive::new(CycleConfig {
+        watchdog_us: WATCHDOG_LIMIT_US,
+        ..CycleConfig::source()
+    });
     let debounce = |exec: &mut Executive<IW, OW>, point: usize, k: u8| {
         let _ = exec.conditioning_mut().set_debounce(point, k);
     };
@@ -157,8 +170,8 @@ pub fn run_one(
     let mut watchdog_safe_ms = 0u64;
     let mut power_failures = 0u32;
     let mut ends: Vec<(u64, Ending)> = Vec::new();
-    let mut worst_cycle_us = 0u32;
-    let mut last_cycle_ms: Option<u64> = None;
+    let mut power_back_ms = 0u64;
+    let mut tally_checks = 0u64;
 
     let total_ms = (config.hours * 3_600_000.0).round() as u64;
     let mut wall_ms = 0u64;
@@ -224,157 +237,147 @@ pub fn run_one(
             false
         });
 
-        if let Some(until) = power_until {
-            if wall_ms < until {
-                continue; // everything stands; the calendar runs on its battery clock
-            }
-            power_until = None;
-            if let Some((snapshots, meters)) = stored.take() {
-                for (d, (snapshot, meter)) in snapshots.iter().zip(meters).enumerate() {
-                    let sa: [u32; BINS_PER_DOCK] =
-                        std::array::from_fn(|j| chain::bin_sa(j) - chain::LEAD_PULSES);
-                    let table = DistanceTable::new(chain::SIA, &sa).map_err(|e| e.to_string())?;
-                    let mut tracker =
-                        DockTracker::new(table, SOURCE_HOLD_PULSES).map_err(|e| e.to_string())?;
-                    let (meter, _) = start_up(
-                        &mut tracker,
-                        Some(snapshot),
-                        Some(meter),
-                        StretchConfig::new(chain::SIA),
-                    )
-                    .map_err(|e| e.to_string())?;
-                    control.trackers[d] = tracker;
-                    control.meters[d] = meter;
+        // The tick's work; a power failure or a hang ends it early (`break 'tick`), the
+        // tally is checked after it all the same.
+        'tick: {
+            if let Some(until) = power_until {
+                if wall_ms < until {
+                    break 'tick; // everything stands; the calendar runs on its battery clock
                 }
-            }
-            exec.resume(Restart::WhereStopped);
-            last_cycle_ms = None;
-            power_failures += 1;
-            control.print(format!(
-                "{} power back, resumed where stopped",
-                stamp(wall_ms)
-            ));
-        }
-
-        // Level A, every 10 ms: the panel links, the field, the input flip-flops.
-        desks.tick_10ms(wall_ms, &mut |panel, command| {
-            control.commands.push_back((panel, command))
-        });
-        let mut capture = [0u16; IW];
-        field.advance(&mut capture);
-        if capture.iter().any(|&w| w != 0) {
-            exec.capture(&capture);
-        }
-        while let Some(k) = keyed.get(next_key).filter(|k| k.at_ms <= wall_ms) {
-            next_key += 1;
-            desks.type_in(k.panel, k.command);
-        }
-        while let Some(s) = sacks.get(next_sack).filter(|s| s.at_ms <= wall_ms) {
-            next_sack += 1;
-            desk_sacks[usize::from(s.desk.min(2))].push_back(*s);
-        }
-        for p in 0..DESKS {
-            match operators[p] {
-                Operator::Idle => {
-                    if field.desk_ready(p) && !field.release_open(p) {
-                        if let Some(sack) = desk_sacks[p].pop_front() {
-                            desks.type_in(PanelId::Desk(p as u8), sack.entry);
-                            operators[p] = Operator::Typed {
-                                at_ms: field.now_ms,
-                            };
-                        }
+                power_until = None;
+                if let Some((snapshots, meters)) = stored.take() {
+                    for (d, (snapshot, meter)) in snapshots.iter().zip(meters).enumerate() {
+                        let sa: [u32; BINS_PER_DOCK] =
+                            std::array::from_fn(|j| chain::bin_sa(j) - chain::LEAD_PULSES);
+                        let table =
+                            DistanceTable::new(chain::SIA, &sa).map_err(|e| e.to_string())?;
+                        let mut tracker = DockTracker::new(table, SOURCE_HOLD_PULSES)
+                            .map_err(|e| e.to_string())?;
+                        let (meter, _) = start_up(
+                            &mut tracker,
+                            Some(snapshot),
+                            Some(meter),
+                            StretchConfig::new(chain::SIA),
+                        )
+                        .map_err(|e| e.to_string())?;
+                        control.trackers[d] = tracker;
+                        control.meters[d] = meter;
                     }
                 }
-                Operator::Typed { at_ms } => {
-                    if field.release_open(p) {
-                        if let Some(dest) = control.accepted[p].take() {
-                            field.load(p, dest);
-                            operators[p] = Operator::Idle;
-                        }
-                    } else if field.now_ms > at_ms + 6_000 {
-                        operators[p] = Operator::Idle; // refused: the sack goes back
-                    }
-                }
-            }
-        }
-
-        // The watchdog, checked every 10 ms; a hung program runs no cycle.
-        if let Some((from, until, tripped)) = hang {
-            if wall_ms >= until {
-                if tripped {
-                    exec.reset_watchdog();
-                    control.print(format!(
-                        "{} watchdog reset, program restarted",
-                        stamp(wall_ms)
-                    ));
-                }
-                hang = None;
-                last_cycle_ms = None;
-            } else {
-                if !tripped && exec.check_watchdog(&mut field) {
-                    watchdog_safe_ms = watchdog_safe_ms.max(wall_ms - from);
-                    hang = Some((from, until, true));
-                }
-                continue;
-            }
-        }
-        exec.check_watchdog(&mut field);
-
-        if wall_ms.is_multiple_of(50) {
-            if let Some(last) = last_cycle_ms {
-                worst_cycle_us = worst_cycle_us.max(((wall_ms - last) * 1000) as u32);
-            }
-            last_cycle_ms = Some(wall_ms);
-            let (lanes, stations) = field.fills();
-            let ready = std::array::from_fn(|p| field.desk_ready(p));
-            control.show_field(ready, &lanes, &stations);
-            let _ = exec.cycle(&mut field, |scan| steps.run(scan, &mut control));
-            field.emptying = control.emptying;
-            desks.refresh(&control.live);
-            if teletype_free_ms <= wall_ms {
-                let reserve_cost = Rc::clone(&cost);
-                let mut started_job = None;
-                exec.reserve(&mut field, &mut control.spool, 0, |job| {
-                    started_job = Some(job.0);
-                    reserve_cost.set(1_000_000); // the reserve now waits on the teletype
-                });
-                if let Some(line) = started_job {
-                    teletype_free_ms = wall_ms + (line.len() as u64 + 2) * TELETYPE_MS_PER_CHAR;
-                    printed.push(line);
-                }
-            }
-        }
-
-        if wall_ms.is_multiple_of(60_000) {
-            let loaded: u64 = field.counts.loaded.iter().sum();
-            let in_plant = field.sacks_in_plant();
-            let c = &field.counts;
-            if c.delivered + c.misdelivered + c.rejected + in_plant != loaded {
-                return Err(format!(
-                    "tally broken at minute {} ({}): delivered {} + misdelivered {} + rejected {} + in the plant {} != loaded {loaded}",
-                    wall_ms / 60_000,
-                    stamp(wall_ms),
-                    c.delivered,
-                    c.misdelivered,
-                    c.rejected,
-                    in_plant
+                exec.resume(Restart::WhereStopped);
+                power_back_ms = wall_ms;
+                power_failures += 1;
+                control.print(format!(
+                    "{} power back, resumed where stopped",
+                    stamp(wall_ms)
                 ));
             }
+
+            // Level A, every 10 ms: the panel links, the field, the input flip-flops.
+            desks.tick_10ms(wall_ms, &mut |panel, command| {
+                control.commands.push_back((panel, command))
+            });
+            let mut capture = [0u16; IW];
+            field.advance(&mut capture);
+            if capture.iter().any(|&w| w != 0) {
+                exec.capture(&capture);
+            }
+            while let Some(k) = keyed.get(next_key).filter(|k| k.at_ms <= wall_ms) {
+                next_key += 1;
+                desks.type_in(k.panel, k.command);
+            }
+            while let Some(s) = sacks.get(next_sack).filter(|s| s.at_ms <= wall_ms) {
+                next_sack += 1;
+                desk_sacks[usize::from(s.desk.min(2))].push_back(*s);
+            }
+            for p in 0..DESKS {
+                match operators[p] {
+                    Operator::Idle => {
+                        if field.desk_ready(p) && !field.release_open(p) {
+                            if let Some(sack) = desk_sacks[p].pop_front() {
+                                desks.type_in(PanelId::Desk(p as u8), sack.entry);
+                                operators[p] = Operator::Typed {
+                                    at_ms: field.now_ms,
+                                };
+                            }
+                        }
+                    }
+                    Operator::Typed { at_ms } => {
+                        if field.release_open(p) {
+                            if let Some(dest) = control.accepted[p].take() {
+                                field.load(p, dest);
+                                operators[p] = Operator::Idle;
+                            }
+                        } else if field.now_ms > at_ms + 6_000 {
+                            operators[p] = Operator::Idle; // refused: the sack goes back
+                        }
+                    }
+                }
+            }
+
+            // The watchdog, checked every 10 ms; a hung program runs no cycle.
+            if let Some((from, until, tripped)) = hang {
+                if wall_ms >= until {
+                    if tripped {
+                        exec.reset_watchdog();
+                        control.print(format!(
+                            "{} watchdog reset, program restarted",
+                            stamp(wall_ms)
+                        ));
+                    }
+                    hang = None;
+                } else {
+                    if !tripped && exec.check_watchdog(&mut field) {
+                        // A hang that began during a power failure counts from the power's return.
+                        let since = from.max(power_back_ms);
+                        watchdog_safe_ms = watchdog_safe_ms.max(wall_ms.saturating_sub(since));
+                        hang = Some((from, until, true));
+                    }
+                    break 'tick;
+                }
+            }
+            exec.check_watchdog(&mut field);
+
+            if wall_ms.is_multiple_of(50) {
+                let (lanes, stations) = field.fills();
+                let ready = std::array::from_fn(|p| field.desk_ready(p));
+                control.show_field(ready, &lanes, &stations);
+                let _ = exec.cycle(&mut field, |scan| steps.run(scan, &mut control));
+                field.emptying = control.emptying;
+                desks.refresh(&control.live);
+                if teletype_free_ms <= wall_ms {
+                    let reserve_cost = Rc::clone(&cost);
+                    let mut started_job = None;
+                    exec.reserve(&mut field, &mut control.spool, 0, |job| {
+                        started_job = Some(job.0);
+                        reserve_cost.set(1_000_000); // the reserve now waits on the teletype
+                    });
+                    if let Some(line) = started_job {
+                        teletype_free_ms = wall_ms + (line.len() as u64 + 2) * TELETYPE_MS_PER_CHAR;
+                        printed.push(line);
+                    }
+                }
+            }
+        }
+
+        if wall_ms.is_multiple_of(60_000) || wall_ms >= total_ms {
+            check_tally(&field, wall_ms)?;
+            tally_checks += 1;
             progress(1);
         }
     }
-
     let stats = exec.stats();
     let readers = control
         .health
         .iter()
-        .map(|h| {
+        .enumerate()
+        .map(|(r, h)| {
             let t = h.totals();
             ReaderFigures {
                 passages: t.passages,
                 no_reads: t.no_reads,
                 disagreements: t.disagreements,
-                alarm: h.alarm(),
+                alarm: h.alarm() || control.presence_fault(r),
                 alarms_raised: h.alarms_raised(),
             }
         })
@@ -392,7 +395,7 @@ pub fn run_one(
         cycles: exec.cycle_count(),
         busy_mean_us: stats.mean_us(),
         busy_max_us: stats.max_us,
-        worst_cycle_us,
+        tally_checks,
         watchdog_trips: exec.watchdog_trips(),
         watchdog_safe_ms,
         power_failures,
@@ -402,6 +405,25 @@ pub fn run_one(
         real_seconds: started.elapsed().as_secs_f64(),
         hours: config.hours,
     })
+}
+
+/// delivered + misdelivered + rejected + in the plant = loaded, or the error naming the minute.
+fn check_tally(field: &Field, wall_ms: u64) -> Result<(), String> {
+    let loaded: u64 = field.counts.loaded.iter().sum();
+    let in_plant = field.sacks_in_plant();
+    let c = &field.counts;
+    if c.delivered + c.misdelivered + c.rejected + in_plant != loaded {
+        return Err(format!(
+            "tally broken at minute {} ({}): delivered {} + misdelivered {} + rejected {} + in the plant {} != loaded {loaded}",
+            wall_ms / 60_000,
+            stamp(wall_ms),
+            c.delivered,
+            c.misdelivered,
+            c.rejected,
+            in_plant
+        ));
+    }
+    Ok(())
 }
 
 #[derive(Clone, Copy, Debug)]

@@ -6,7 +6,7 @@ use regler_scan_cycle::Scan;
 
 use super::super::layout::{BINS_PER_DOCK, DOCKS, io};
 use super::super::operator::BUFFER_LANES;
-use super::{Control, IW, OW, PORTION, Timer, cost};
+use super::{Control, IW, OW, PORTION, SUPERVISE_TICKS, Timer, cost};
 
 impl Control {
     /// Dock chains: pulses through the tracker and the stretch meter, tippers set and reset.
@@ -52,6 +52,17 @@ impl Control {
 
     pub(super) fn lane_exits(scan: &mut Scan<'_, IW, OW>, c: &mut Control) {
         let exits = scan.inputs.word(io::LANE_EXIT_WORD).unwrap_or(0);
+        // Each trolley a lane lets go must be read at R9 in time.
+        for l in 0..BUFFER_LANES {
+            if exits >> l & 1 == 1 {
+                if let Ok(timer) = c
+                    .timers
+                    .insert(SUPERVISE_TICKS, Timer::ExpectAtR9 { lane: l })
+                {
+                    c.to_r9.push_back(timer);
+                }
+            }
+        }
         if let Some((lane, left, timer)) = c.portion {
             if exits >> lane & 1 == 1 {
                 let left = left.saturating_sub(1);

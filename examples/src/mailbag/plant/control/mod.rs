@@ -3,6 +3,11 @@
 //! emptying, the calendar — with the timer shift register ([`TimerQueue`]) for timed sequences
 //! and time supervision, and the teletype's [`Spool`].
 //!
+//! A switch is set for the passage judged and goes back to its safe position (the manual
+//! station) on the timer queue once that trolley has passed; presence inputs, the trolleys
+//! routed toward a reader and the lanes' exits toward R9 are supervised (the plant's module
+//! docs, "Switches and supervision").
+//!
 //! Each routine adds its cost in simulated µs to the cycle ([`cost`]): the executive measures
 //! the cycle's busy time on that clock, as the source's idle counter measured its load.
 
@@ -98,6 +103,11 @@ enum Timer {
     Supervise { trolley: u16, next: usize },
     /// An emptying portion did not finish in time.
     PortionTimeout,
+    /// A reader's switch goes back to its safe position (no exit set, the reject gate shut:
+    /// the manual station) once the trolley it was set for has passed it.
+    SafeSwitch(usize),
+    /// A buffer lane let a trolley go: R9 should have read one by now.
+    ExpectAtR9 { lane: u8 },
 }
 
 /// A teletype printout.
@@ -121,12 +131,22 @@ const ALARM_LIMITS: AlarmLimits = AlarmLimits {
     disagreement_per_mille: 10,
     min_passages: 200,
 };
+/// `minute_seen` before the first cycle.
+const MINUTE_UNSEEN: u8 = 255;
 /// Scans of a standing trolley taken at a desk for one entry.
 const DESK_SCANS: u8 = 5;
 /// Trolleys per emptying portion.
 pub const PORTION: u32 = 5;
 /// Time supervision: a trolley must reach the next reader within this (ticks of 50 ms).
 const SUPERVISE_TICKS: u32 = 2 * 60 * 20;
+/// A switch set at a passage's end holds this long (ticks of 50 ms), then goes back to its safe
+/// position: the trolley reaches the switch 1 s after its passage ends
+/// ([`timing::SWITCH_MS`](super::layout::timing::SWITCH_MS)), the next trolley's passage ends
+/// 2 s after at the earliest ([`timing::HEADWAY_MS`](super::layout::timing::HEADWAY_MS)).
+const SWITCH_HOLD_TICKS: u32 = 30;
+/// A presence input on for more than this many cycles (1 s) at a rail reader — a passage
+/// lasts 250 ms — or on without a trolley's code at a desk's reader is a fault.
+const PRESENCE_LIMIT_CYCLES: u32 = 20;
 
 /// A test of the chain and the routine it calls.
 type Step = (
@@ -160,7 +180,21 @@ pub struct Control {
     /// Stretch meters.
     pub meters: Vec<StretchMeter>,
     timers: Box<TimerQueue<Timer, 8192>>,
-    supervision: Vec<Option<TimerId>>,
+    /// Per trolley: its time supervision's timer and the reader it is expected at.
+    supervision: Vec<Option<(TimerId, usize)>>,
+    /// Per reader: the timer that puts its switch back to the safe position.
+    switch_timer: [Option<TimerId>; READERS],
+    /// Per reader: cycles its presence input has been on (at a desk: on without a code).
+    presence_on: [u32; READERS],
+    /// Per reader: its presence input is faulty (on too long); the alarm is on, the switch safe.
+    presence_fault: [bool; READERS],
+    /// Per desk: an entry found no trolley at the desk, reported; cleared when one is seen.
+    desk_unseen: [bool; DESKS],
+    /// Per trolley: the buffer lane R6 or R7 switched it into (taken at R9).
+    routed_lane: Vec<Option<u8>>,
+    /// The lane-exit supervision timers, oldest first: one per trolley a lane let go, until R9
+    /// has a passage.
+    to_r9: VecDeque<TimerId>,
     /// The calendar.
     pub calendar: DateTime,
     table: MinuteTable<u8, 16>,
@@ -256,6 +290,12 @@ impl Control {
             meters,
             timers: Box::new(TimerQueue::new()),
             supervision: vec![None; 4096],
+            switch_timer: [None; READERS],
+            presence_on: [0; READERS],
+            presence_fault: [false; READERS],
+            desk_unseen: [false; DESKS],
+            routed_lane: vec![None; 4096],
+            to_r9: VecDeque::new(),
             calendar,
             table,
             calendar_schedule,
@@ -272,7 +312,7 @@ impl Control {
             alarms_raised: 0,
             recalibrations: 0,
             passages: 0,
-            minute_seen: 255,
+            minute_seen: MINUTE_UNSEEN,
             hour_loaded: [0; DESKS],
         }
     }
@@ -295,6 +335,12 @@ impl Control {
             self.calendar.minute(),
             self.calendar.second()
         )
+    }
+
+    /// Whether reader `r`'s presence input is reported faulty (its alarm is on).
+    #[must_use]
+    pub fn presence_fault(&self, r: usize) -> bool {
+        self.presence_fault.get(r).copied().unwrap_or(false)
     }
 
     /// The sorting schedule in force.
@@ -339,7 +385,13 @@ impl Control {
         c.spend(cost::IO_US + 20 * cost::TEST_US);
         let _ = scan.outputs.set(io::DRIVES, true);
         if c.calendar.minute() != c.minute_seen {
+            // The first cycle only notes the minute: the schedule in force at the start is set
+            // at start-up, and the statistics are printed at a midnight *after* the start.
+            let first = c.minute_seen == MINUTE_UNSEEN;
             c.minute_seen = c.calendar.minute();
+            if first {
+                return;
+            }
             c.spend(cost::CALENDAR_US);
             let mut due = Vec::new();
             let now = c.calendar;
@@ -435,6 +487,23 @@ impl Control {
     /// cell is written and the release gate opens for a second.
     fn desks(scan: &mut Scan<'_, IW, OW>, c: &mut Control) {
         for p in 0..DESKS {
+            let raw = scan.inputs.word(p).unwrap_or(0);
+            if raw >> io::PRESENT_BIT & 1 == 1 {
+                c.desk_unseen[p] = false;
+            }
+            // The desk's presence input on without a trolley's code: a stuck sensor (or a
+            // dead reader).
+            if raw >> io::PRESENT_BIT & 1 == 1 && raw & io::CAMS == 0 {
+                c.presence_on[p] = c.presence_on[p].saturating_add(1);
+                if c.presence_on[p] > PRESENCE_LIMIT_CYCLES && !c.presence_fault[p] {
+                    c.set_presence_fault(p, true);
+                }
+            } else {
+                c.presence_on[p] = 0;
+                if c.presence_fault[p] {
+                    c.set_presence_fault(p, false);
+                }
+            }
             let Some(mut entry) = c.entries[p] else {
                 continue;
             };
@@ -447,6 +516,17 @@ impl Control {
                     c.entries[p] = None;
                     c.refused += 1;
                     c.live.desks[p].verdict = EntryVerdict::Refused;
+                    if !c.desk_unseen[p] {
+                        c.desk_unseen[p] = true;
+                        c.supervision_faults += 1;
+                        let text = format!(
+                            "{} desk P{}: no trolley seen at {} for an entry, refused",
+                            c.stamp(),
+                            p + 1,
+                            READER_NAMES[p]
+                        );
+                        c.print(text);
+                    }
                 } else {
                     c.entries[p] = Some(entry);
                 }
@@ -466,6 +546,7 @@ impl Control {
             match passage.verdict {
                 Verdict::Identified(id) => {
                     c.registry.assign(id, entry.dest);
+                    c.routed_lane[usize::from(id.get())] = None;
                     c.accepted[p] = Some(entry.dest);
                     let _ = scan.outputs.set(io::release(p), true);
                     let _ = c.timers.insert(20, Timer::CloseRelease(p));
@@ -489,6 +570,20 @@ impl Control {
             match t {
                 Timer::CloseRelease(p) => {
                     let _ = scan.outputs.set(io::release(p), false);
+                }
+                Timer::SafeSwitch(r) => {
+                    c.switch_timer[r] = None;
+                    c.safe_switch(r, scan);
+                }
+                Timer::ExpectAtR9 { lane } => {
+                    c.to_r9.pop_front();
+                    c.supervision_faults += 1;
+                    let text = format!(
+                        "{} trolley from lane {} not seen at R9 in time",
+                        c.stamp(),
+                        super::operator::lane_name(lane)
+                    );
+                    c.print(text);
                 }
                 Timer::Supervise { trolley, next } => {
                     c.supervision[usize::from(trolley)] = None;
@@ -517,7 +612,7 @@ impl Control {
         c.live.schedule = c.schedule();
         c.live.schedule_override = c.schedule_override.is_some();
         c.live.reader_alarms = (0..READERS)
-            .filter(|&r| c.health[r].alarm())
+            .filter(|&r| c.health[r].alarm() || c.presence_fault[r])
             .fold(0, |a, r| a | 1 << r);
         for p in 0..DESKS {
             c.live.desks[p].sacks_this_hour = c.hour_loaded[p];
