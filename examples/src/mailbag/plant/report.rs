@@ -442,8 +442,15 @@ pub fn summary_text(report: &Report) -> String {
     );
     let _ = writeln!(
         s,
-        "faults                      watchdog trips {} (outputs safe {} ms after the hang)  power failures survived {}  time-supervision reports {}",
-        v.watchdog_trips, v.watchdog_safe_ms, v.power_failures, v.supervision_faults
+        "faults                      watchdog trips {}{}  power failures survived {}  time-supervision reports {}",
+        v.watchdog_trips,
+        if v.watchdog_trips > 0 {
+            format!(" (outputs safe {} ms after the hang)", v.watchdog_safe_ms)
+        } else {
+            String::new()
+        },
+        v.power_failures,
+        v.supervision_faults
     );
     let _ = writeln!(
         s,
