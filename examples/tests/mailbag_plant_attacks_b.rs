@@ -42,7 +42,7 @@ fn a_stuck_presence_input_at_any_reader_misdelivers_nothing_and_is_reported() {
     let mut wrong = Vec::new();
     for reader in READER_NAMES {
         for v in ["0", "1"] {
-            let fault = format!("stuck@00:02:present-{reader}:{v}");
+            let fault = format!("stuck@00:02:00:present-{reader}:{v}:0");
             let config = Config {
                 traffic: 3.0,
                 ..config(0.25, &[&fault])
@@ -72,7 +72,7 @@ fn a_stuck_presence_input_at_any_reader_misdelivers_nothing_and_is_reported() {
 #[test]
 fn a_stuck_present_r7_sends_e_lane_trolleys_to_the_manual_station_with_reports() {
     for v in ["0", "1"] {
-        let fault = format!("stuck@00:02:present-R7:{v}");
+        let fault = format!("stuck@00:02:00:present-R7:{v}:0");
         for reading in [Reading::ParityOnly, Reading::Voting] {
             let r = run(&config(1.0, &[&fault]), reading, &|_| {});
             assert_eq!(r.counts.misdelivered, 0, "{fault} {reading:?}");
@@ -91,8 +91,8 @@ fn the_tally_is_checked_every_simulated_minute() {
     let mut wrong = Vec::new();
     for (hours, faults) in [
         (0.01, vec![]),
-        (0.5, vec!["hang@00:10:600"]),
-        (0.5, vec!["power@00:10:600"]),
+        (0.5, vec!["hang@00:10:00:600"]),
+        (0.5, vec!["power@00:10:00:600"]),
         (0.5, vec![]),
         (0.26, vec![]),
     ] {
@@ -120,10 +120,10 @@ fn the_tally_is_checked_every_simulated_minute() {
 fn the_outputs_are_safe_within_100_ms_of_a_hang() {
     let mut wrong = Vec::new();
     for faults in [
-        vec!["hang@00:00:1"],
-        vec!["power@00:00:600", "hang@00:10:2"],
-        vec!["power@00:05:60", "hang@00:05:90"],
-        vec!["hang@00:10:5"],
+        vec!["hang@00:00:00:1"],
+        vec!["power@00:00:00:600", "hang@00:10:00:2"],
+        vec!["power@00:05:00:60", "hang@00:05:00:90"],
+        vec!["hang@00:10:00:5"],
     ] {
         let config = config(0.2, &faults);
         let r = run(&config, Reading::Voting, &|_| {});
