@@ -13,26 +13,33 @@ pub(super) fn scan(rng: &mut ChaCha8Rng, word: u16, readings: u8, disturbed: f64
     (0..readings)
         .map(|_| {
             if swinging && rng.random_bool(DISTURBED_SHARE) {
-                let flips = match rng.random_range(0..100) {
-                    0..50 => 1,
-                    50..85 => 2,
-                    _ => 3,
-                };
-                let mut w = word;
-                let mut flipped = 0;
-                while flipped < flips {
-                    let bit = 1u16 << rng.random_range(0..13);
-                    if (w ^ word) & bit == 0 {
-                        w ^= bit;
-                        flipped += 1;
-                    }
-                }
-                w
+                misread(rng, word)
             } else {
                 word
             }
         })
         .collect()
+}
+
+/// One wrong scan of `word`: 1, 2 or 3 distinct cams flipped (50 %, 35 %, 15 %). Parity catches
+/// the odd counts; two flipped cams read as another trolley's number. The dock chains' readers
+/// and the whole plant's (`plant::field`) draw their wrong scans here.
+pub(crate) fn misread(rng: &mut impl Rng, word: u16) -> u16 {
+    let flips = match rng.random_range(0..100) {
+        0..50 => 1,
+        50..85 => 2,
+        _ => 3,
+    };
+    let mut w = word;
+    let mut flipped = 0;
+    while flipped < flips {
+        let bit = 1u16 << rng.random_range(0..13);
+        if (w ^ word) & bit == 0 {
+            w ^= bit;
+            flipped += 1;
+        }
+    }
+    w
 }
 
 /// The source's reading: one scan, parity checked, nothing else.

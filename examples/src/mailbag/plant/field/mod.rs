@@ -541,20 +541,6 @@ impl Field {
         if !(swinging && self.rng.random_bool(DISTURBED_SHARE)) {
             return word;
         }
-        let flips = match self.rng.random_range(0..100) {
-            0..50 => 1,
-            50..85 => 2,
-            _ => 3,
-        };
-        let mut w = word;
-        let mut flipped = 0;
-        while flipped < flips {
-            let bit = 1u16 << self.rng.random_range(0..13);
-            if (w ^ word) & bit == 0 {
-                w ^= bit;
-                flipped += 1;
-            }
-        }
-        w
+        crate::mailbag::readers::misread(&mut self.rng, word)
     }
 }
