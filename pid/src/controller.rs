@@ -7,6 +7,9 @@ use crate::config::{Action, Config, ConfigError, Parameter};
 use crate::real::Real;
 use crate::scalar::Scalar;
 
+#[cfg(feature = "fixed")]
+pub(crate) mod raw;
+
 /// Whether the controller computes its output or follows the operator's.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -196,6 +199,9 @@ pub struct Pid<T> {
     /// running) is one test per sample.
     flags: u8,
     faults: Faults,
+    /// Fixed point: the exponent of the input gate of the raw-integer update
+    /// (`controller/raw.rs`), set with the coefficients; unused by floats.
+    fast_gate: u8,
 }
 
 /// A sample has been taken since construction or reset.
@@ -501,6 +507,7 @@ impl<T: Scalar> Pid<T> {
             u_old: zero,
             flags: 0,
             faults: Faults::default(),
+            fast_gate: 0,
         };
         pid.apply(k);
         pid.reset();
@@ -522,6 +529,7 @@ impl<T: Scalar> Pid<T> {
         self.i_mid = k.i_mid;
         self.i_half = k.i_half;
         self.d_bound = k.d_bound;
+        self.fast_gate = T::raw_gate(self);
     }
 
     /// One sample: the output for set-point `r` and measurement `y`.
@@ -565,6 +573,13 @@ impl<T: Scalar> Pid<T> {
     /// prologue and epilogue on every sample).
     #[inline(always)]
     fn step<const FEEDFORWARD: bool>(&mut self, r: T, y: T, feedforward: T, track: Option<T>) -> T {
+        if T::RAW_PATH {
+            // Fixed point: the common sample on the raw integers (`controller/raw.rs`).
+            if let Some(u) = T::raw_step::<FEEDFORWARD>(self, r, y, feedforward, track) {
+                return u;
+            }
+            return self.step_general::<FEEDFORWARD>(r, y, feedforward, track);
+        }
         if self.flags == STARTED {
             let s = self.compute::<FEEDFORWARD>(r, y, feedforward, track, self.yd_old, false);
             // One test accepts the sample: the new integral lies inside its bounds, which move

@@ -1,5 +1,6 @@
 //! The number types a [`Pid`](crate::Pid) computes in.
 
+use crate::Pid;
 use crate::real::Real;
 
 /// A number type the controller computes in: `f32`, `f64`, and with the `fixed` feature any
@@ -104,6 +105,36 @@ pub trait Scalar: Copy + PartialOrd + core::fmt::Debug {
     fn flush_tiny(self) -> Self {
         self
     }
+    /// Whether [`Pid::update`] takes [`raw_step`](Scalar::raw_step) for its common sample
+    /// (fixed point) instead of the generic one. An implementation detail of the fixed-point
+    /// types, not meant to be set elsewhere.
+    #[doc(hidden)]
+    const RAW_PATH: bool = false;
+    /// The common sample of a started controller in automatic on the raw integers, or `None`
+    /// for the general path (nothing stored). An implementation detail of the fixed-point
+    /// types (`pid/src/controller/raw.rs`).
+    #[doc(hidden)]
+    #[inline(always)]
+    #[must_use]
+    fn raw_step<const FEEDFORWARD: bool>(
+        pid: &mut Pid<Self>,
+        setpoint: Self,
+        measurement: Self,
+        feedforward: Self,
+        track: Option<Self>,
+    ) -> Option<Self> {
+        let _ = (pid, setpoint, measurement, feedforward, track);
+        None
+    }
+    /// The gate exponent of [`raw_step`](Scalar::raw_step) for the coefficients `pid` holds.
+    /// An implementation detail of the fixed-point types.
+    #[doc(hidden)]
+    #[inline(always)]
+    #[must_use]
+    fn raw_gate(pid: &Pid<Self>) -> u8 {
+        let _ = pid;
+        0
+    }
     /// `self` limited to `lo..=hi` (which must be ordered; never panics). NaN stays NaN, so a
     /// fault still reaches the controller's check.
     ///
@@ -199,6 +230,31 @@ macro_rules! fixed_scalar {
         impl<Frac: fixed::types::extra::$bound> Scalar for fixed::$fixed<Frac> {
             const ZERO: Self = Self::ZERO;
             const MAX: Self = Self::MAX;
+            const RAW_PATH: bool = true;
+            #[inline(always)]
+            fn raw_step<const FEEDFORWARD: bool>(
+                pid: &mut Pid<Self>,
+                setpoint: Self,
+                measurement: Self,
+                feedforward: Self,
+                track: Option<Self>,
+            ) -> Option<Self> {
+                crate::controller::raw::step::<Self, $bits, FEEDFORWARD>(
+                    pid,
+                    setpoint,
+                    measurement,
+                    feedforward,
+                    track,
+                    Frac::U32,
+                    Self::to_bits,
+                    Self::from_bits,
+                )
+            }
+            fn raw_gate(pid: &Pid<Self>) -> u8 {
+                // 2^-frac (frac <= 64): the exponent field of an f64 set directly.
+                let lsb = f64::from_bits(u64::from(1023u32.saturating_sub(Frac::U32)) << 52);
+                crate::controller::raw::gate::<Self, $bits>(pid, lsb, Self::MAX.to_num::<f64>())
+            }
             /// Scaled by 2^frac (exact: a power of two), rounded to nearest with ties away
             /// from zero, saturated; NaN → 0, +∞ → `MAX`, −∞ → `MIN`. Written out rather than
             /// `saturating_from_num`, which links a `panic!` for NaN: a firmware whose panic
