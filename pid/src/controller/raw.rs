@@ -331,3 +331,468 @@ pub(crate) fn gate<T: Scalar, R: Raw>(pid: &Pid<T>, lsb: f64, max: f64) -> u8 {
         k -= 1;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use fixed::types::{I16F16, I32F32, I48F16};
+    use fixed::{FixedI32, types::extra::U24};
+    use proptest::prelude::{ProptestConfig, any, prop, prop_assert, proptest};
+    use proptest::strategy::{Just, Strategy};
+
+    use super::super::{Inputs, Pid, STARTED};
+    use crate::Scalar;
+    use crate::config::{Action, Config, Kind};
+
+    /// Q8.24: a `FixedI32` whose products take the split path on ARMv6-M only for frac ≤ 16.
+    type I8F24 = FixedI32<U24>;
+
+    /// The update as it was before the raw path: the generic common sample, every operation
+    /// checked, and the general path. The raw path must give the same, bit for bit. One
+    /// difference, on purpose: the acceptance test of the common sample, |centre − I| ≤ i_half,
+    /// is taken exactly, where the old one saturated centre − I first and so, with i_half at
+    /// the type's maximum, accepted an integral beyond its bounds (see
+    /// `an_integral_beyond_bounds_that_span_the_type_is_bounded`).
+    fn checked<T: Scalar, const FEEDFORWARD: bool>(
+        pid: &mut Pid<T>,
+        r: T,
+        y: T,
+        feedforward: T,
+        track: Option<T>,
+    ) -> T {
+        if pid.flags == STARTED {
+            let s = pid.compute::<FEEDFORWARD>(r, y, feedforward, track, pid.yd_old, false);
+            let centre = pid.integral_centre(r, pid.bounds_feedforward::<FEEDFORWARD>(feedforward));
+            let mut wrapped = false;
+            let away = centre.sub_noting(s.i, &mut wrapped);
+            if !s.saturated && !wrapped && away.magnitude_within(pid.i_half) {
+                return pid.commit(s, r, track);
+            }
+        }
+        pid.step_general::<FEEDFORWARD>(r, y, feedforward, track)
+    }
+
+    /// Cases from `PROPTEST_CASES` (256 unless set); four under Miri.
+    fn cases() -> ProptestConfig {
+        let default = ProptestConfig::default();
+        ProptestConfig {
+            cases: if cfg!(miri) { 4 } else { default.cases },
+            ..default
+        }
+    }
+
+    /// Configurations over many scales: small and large gains, fast and slow integrals and
+    /// derivatives, narrow and wide output ranges (many refused by `Pid::new` for a type: skipped).
+    fn configs() -> impl Strategy<Value = Config> {
+        let kind = prop::sample::select(vec![Kind::P, Kind::I, Kind::PI, Kind::PD, Kind::PID]);
+        let log = |lo: f64, hi: f64| (lo.ln()..hi.ln()).prop_map(f64::exp);
+        (
+            kind,
+            any::<bool>(),
+            log(1e-3, 1e3),
+            log(1e-2, 1e3),
+            log(1e-3, 1e2),
+            1.0..20.0f64,
+            (0.0..2.0f64, 0.0..1.5f64),
+            log(1e-3, 1.0),
+            prop::option::of(0.6..20.0f64),
+            (log(1e-2, 3e4), -1.0..1.0f64),
+            prop::option::of(log(1e-3, 1e3)),
+        )
+            .prop_map(
+                |(kind, reverse, k, ti, td, n, (b, c), h, tt, (span, low), dymax)| Config {
+                    kind,
+                    action: if reverse {
+                        Action::Reverse
+                    } else {
+                        Action::Direct
+                    },
+                    k,
+                    ti,
+                    td,
+                    n,
+                    b,
+                    c,
+                    h,
+                    tt: tt.map(|t| t * h),
+                    ymin: span * low.min(0.0),
+                    ymax: span * (low + 1.0).min(1.0),
+                    dymax,
+                },
+            )
+    }
+
+    /// One step of a run: a sample (set-point and measurement as raw bits shifted right by a
+    /// random count, so every magnitude up to the type's ends comes up), with feed-forward and
+    /// tracking now and then, or an operator's action.
+    #[derive(Clone, Debug)]
+    enum Op {
+        Sample(i64, u8, i64, u8),
+        With(i64, u8, i64, u8, i64, u8, Option<(i64, u8)>),
+        Manual(i64, u8),
+        Auto,
+        Reset,
+    }
+
+    fn ops() -> impl Strategy<Value = Vec<Op>> {
+        let value = || (any::<i64>(), 0..64u8);
+        let op = prop::strategy::Union::new_weighted(vec![
+            (
+                12,
+                (value(), value())
+                    .prop_map(|((r, rs), (y, ys))| Op::Sample(r, rs, y, ys))
+                    .boxed(),
+            ),
+            (
+                3,
+                (value(), value(), value(), prop::option::of(value()))
+                    .prop_map(|((r, rs), (y, ys), (f, fs), t)| Op::With(r, rs, y, ys, f, fs, t))
+                    .boxed(),
+            ),
+            (1, value().prop_map(|(u, s)| Op::Manual(u, s)).boxed()),
+            (1, Just(Op::Auto).boxed()),
+            (1, Just(Op::Reset).boxed()),
+        ]);
+        prop::collection::vec(op, 1..120)
+    }
+
+    /// A value from raw bits and a shift: magnitudes from 0 to the type's ends, log-uniform
+    /// (a shift of 32 or more in a 32-bit type lands near zero).
+    trait FromRaw: Scalar {
+        fn from_raw(bits: i64, shift: u8) -> Self;
+    }
+    macro_rules! from_raw {
+        ($($t:ty: $bits:ty),*) => {$(
+            impl FromRaw for $t {
+                #[allow(clippy::cast_possible_truncation, reason = "a random value's low bits")]
+                fn from_raw(bits: i64, shift: u8) -> $t {
+                    <$t>::from_bits((bits >> (shift % 64)) as $bits)
+                }
+            }
+        )*};
+    }
+    from_raw!(I16F16: i32, I8F24: i32, I32F32: i64, I48F16: i64);
+
+    /// Runs `ops` on two copies of one controller, one through `update` (the raw path) and
+    /// one through [`checked`]; every output and every state must agree. Returns how many
+    /// samples the raw path took.
+    fn same_as_checked<T: FromRaw>(config: &Config, ops: &[Op]) -> Result<usize, String> {
+        let Ok(mut fast) = Pid::<T>::new(config) else {
+            return Ok(0);
+        };
+        let mut slow = fast.clone();
+        let v = T::from_raw;
+        let mut taken = 0;
+        for (n, op) in ops.iter().enumerate() {
+            match *op {
+                Op::Sample(r, rs, y, ys) => {
+                    let (r, y) = (v(r, rs), v(y, ys));
+                    taken += usize::from(
+                        T::raw_step::<false>(&mut fast.clone(), r, y, T::ZERO, None).is_some(),
+                    );
+                    let a = fast.update(r, y);
+                    let b = checked::<T, false>(&mut slow, r, y, T::ZERO, None);
+                    if a != b || fast != slow {
+                        return Err(format!("op {n} {op:?}: {a:?} {b:?}\n{fast:?}\n{slow:?}"));
+                    }
+                }
+                Op::With(r, rs, y, ys, f, fs, t) => {
+                    let (r, y, f) = (v(r, rs), v(y, ys), v(f, fs));
+                    let track = t.map(|(t, ts)| v(t, ts));
+                    taken += usize::from(
+                        T::raw_step::<true>(&mut fast.clone(), r, y, f, track).is_some(),
+                    );
+                    let inputs = Inputs {
+                        feedforward: f,
+                        track,
+                    };
+                    let a = fast.update_with(r, y, inputs);
+                    let b = checked::<T, true>(&mut slow, r, y, f, track);
+                    if a != b || fast != slow {
+                        return Err(format!("op {n} {op:?}: {a:?} {b:?}\n{fast:?}\n{slow:?}"));
+                    }
+                }
+                Op::Manual(u, s) => {
+                    let _ = fast.set_manual(v(u, s));
+                    let _ = slow.set_manual(v(u, s));
+                }
+                Op::Auto => {
+                    fast.set_auto();
+                    slow.set_auto();
+                }
+                Op::Reset => {
+                    fast.reset();
+                    slow.reset();
+                }
+            }
+        }
+        Ok(taken)
+    }
+
+    /// With bounds of half-width i_half = `MAX` (a wide output range in a narrow type), an
+    /// integral more than the type's range from the bounds' centre was accepted by the old
+    /// common sample (centre − I saturated to `MAX`, which passed |·| ≤ `MAX`); the bound holds
+    /// now. Found by the property below (Q8.24, a PI with b = 1.45).
+    #[test]
+    fn an_integral_beyond_bounds_that_span_the_type_is_bounded() {
+        let config = Config {
+            kind: Kind::PI,
+            k: 3.443_424_447_111_794,
+            ti: 7.175_157_551_004_982_5,
+            b: 1.450_814_850_713_115_3,
+            h: 0.089_381_293_237_648_6,
+            ymin: 0.0,
+            ymax: 1.660_967_656_045_574,
+            ..Config::default()
+        };
+        let mut pid = Pid::<I8F24>::new(&config).unwrap();
+        assert_eq!(pid.i_half, I8F24::MAX);
+        pid.update(I8F24::ZERO, I8F24::from_raw(-695_921_867_107_075_297, 1));
+        let r = I8F24::from_raw(7_146_474_155_218_305_024, 15);
+        pid.update(r, I8F24::MIN);
+        let centre = pid.integral_centre(r, I8F24::ZERO).to_f64();
+        let i = pid.integral().to_f64();
+        assert!((centre - i).abs() <= I8F24::MAX.to_f64(), "{centre} {i}");
+        assert!(!pid.faults().any());
+    }
+
+    /// One started, automatic sample in `f64`, from the controller's own coefficients and
+    /// state: the formulas of [`Pid`]'s documentation, unrounded. Returns the output, the new
+    /// I and D, the largest magnitude of the values the update checks for saturation, and the
+    /// rounding the fixed-point update may add to u, I and D, in LSB.
+    fn model<T: Scalar>(
+        pid: &Pid<T>,
+        r: T,
+        y: T,
+        feedforward: T,
+        track: Option<T>,
+    ) -> (f64, f64, f64, f64, [f64; 3]) {
+        let f = |x: T| x.to_f64();
+        let (r, y, ff) = (f(r), f(y), f(feedforward));
+        let (kp, b, c, ad, bd) = (f(pid.kp), f(pid.b), f(pid.c), f(pid.ad), f(pid.bd));
+        let (bi, ao, slope) = (f(pid.bi), f(pid.ao), f(pid.offset_slope));
+        let (i, d, yd_old, u_old) = (f(pid.i), f(pid.d), f(pid.yd_old), f(pid.u_old));
+        let br = b * r;
+        let p = kp * (br - y);
+        let yd = y - c * r;
+        let d_raw = ad * d - bd * (yd - yd_old);
+        let d_new = d_raw.clamp(-f(pid.d_bound), f(pid.d_bound));
+        let v = p + i + d_new + ff;
+        let dymax = f(pid.dymax);
+        let u = v
+            .clamp(u_old - dymax, u_old + dymax)
+            .clamp(f(pid.ymin), f(pid.ymax));
+        let applied = track.map_or(u, f);
+        let integral_step = bi * (r - y);
+        let tracking = ao * (applied - v);
+        let i_new = i + (integral_step + tracking);
+        let bounds_ff = if pid.integrates() { ff } else { 0.0 };
+        let centre = slope * r + f(pid.i_mid) - bounds_ff;
+        let half = f(pid.i_half);
+        let i_bounded = i_new.clamp(centre - half, centre + half);
+        let checked = [
+            br,
+            br - y,
+            p,
+            c * r,
+            yd,
+            ad * d,
+            yd - yd_old,
+            bd * (yd - yd_old),
+            d_raw,
+            p + i,
+            p + i + d_new,
+            v,
+            r - y,
+            integral_step,
+            applied - v,
+            tracking,
+            integral_step + tracking,
+            i_new,
+            slope * r,
+            slope * r + f(pid.i_mid),
+            centre,
+        ];
+        let largest = checked.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        // Each product rounds by half an LSB, and carries its operand's rounding times the
+        // coefficient; sums and clamps add nothing.
+        let e_d = 0.5 + bd.abs() * 0.5 + 0.5;
+        let e_v = 0.5 * kp.abs() + 0.5 + e_d;
+        let e_i = 0.5 + ao.abs() * (e_v + e_v) + 0.5 + 0.5;
+        (u, i_bounded, d_new, largest, [e_v, e_i, e_d])
+    }
+
+    /// A sample for [`follows_the_model`]: set-point and measurement (raw bits, shift), and
+    /// now and then a feed-forward with or without a tracking value.
+    type ModelSample = (i64, u8, i64, u8, Option<(i64, u8, Option<(i64, u8)>)>);
+
+    /// Runs `samples` through a started controller, comparing each with [`model`]: within the
+    /// model's rounding bound where it stays in the type's range (and no fault), the output held,
+    /// the state kept and the overflow fault raised where it leaves it. Returns the samples that
+    /// were checked in range and beyond it.
+    fn follows_the_model<T: FromRaw>(
+        config: &Config,
+        first: (i64, u8, i64, u8),
+        samples: &[ModelSample],
+    ) -> Result<(usize, usize), String> {
+        let Ok(mut pid) = Pid::<T>::new(config) else {
+            return Ok((0, 0));
+        };
+        let v = T::from_raw;
+        let lsb = T::from_raw(1, 0).to_f64();
+        let max = T::MAX.to_f64();
+        pid.update(v(first.0, first.1), v(first.2, first.3));
+        let (mut inside, mut beyond) = (0, 0);
+        for &(r, rs, y, ys, with) in samples {
+            pid.clear_faults();
+            if pid.flags != STARTED {
+                break;
+            }
+            let (r, y) = (v(r, rs), v(y, ys));
+            let (ff, track) = with.map_or((T::ZERO, None), |(f, fs, t)| {
+                (v(f, fs), t.map(|(t, ts)| v(t, ts)))
+            });
+            let (u, i, d, largest, [e_u, e_i, e_d]) = model(&pid, r, y, ff, track);
+            let before = pid.clone();
+            let got = if with.is_some() {
+                pid.update_with(
+                    r,
+                    y,
+                    Inputs {
+                        feedforward: ff,
+                        track,
+                    },
+                )
+            } else {
+                pid.update(r, y)
+            };
+            // Where the model's values reach within a margin of the type's end, rounding decides.
+            let margin = 1e-6 * max + 64.0 * lsb;
+            let tiny = 1e-14 * largest;
+            if largest <= max - margin {
+                inside += 1;
+                let near =
+                    |got: T, want: f64, lsbs: f64| (got.to_f64() - want).abs() <= lsbs * lsb + tiny;
+                if pid.faults().any()
+                    || !near(got, u, e_u)
+                    || !near(pid.i, i, e_i)
+                    || !near(pid.d, d, e_d)
+                {
+                    return Err(format!(
+                        "in range: got u {got:?} I {:?} D {:?}, model u {u} I {i} D {d} \
+                         (±{e_u}, {e_i}, {e_d} LSB), {:?}",
+                        pid.i,
+                        pid.d,
+                        pid.faults()
+                    ));
+                }
+            } else if largest >= max + margin {
+                beyond += 1;
+                let mut held = before.clone();
+                held.faults = pid.faults;
+                if got != before.u_old || pid != held || !pid.faults().overflow() {
+                    return Err(format!(
+                        "beyond range ({largest:e}): got {got:?}, {:?}, state {pid:?}",
+                        pid.faults()
+                    ));
+                }
+            }
+        }
+        Ok((inside, beyond))
+    }
+
+    /// The loop of the benches (`benches/src/pid_loop.rs`: PID with filter, weights,
+    /// back-calculation and rate limit on ±5, a first-order plant) runs on the raw path after
+    /// its first sample: the gate is wide enough for a working loop.
+    #[test]
+    fn a_working_loop_takes_the_raw_path() {
+        fn run<T: Scalar>() -> usize {
+            let config = Config {
+                kind: Kind::PID,
+                k: 2.0,
+                ti: 1.0,
+                td: 0.02,
+                n: 10.0,
+                tt: Some(0.05),
+                h: 0.01,
+                ymin: -5.0,
+                ymax: 5.0,
+                dymax: Some(0.5),
+                ..Config::default()
+            };
+            let mut pid = Pid::<T>::new(&config).unwrap();
+            let (a, mut y) = (T::from_f64(0.05), T::ZERO);
+            let mut general = 0;
+            for n in 0..5_000 {
+                let r = T::from_f64(if n < 2_500 { 1.0 } else { -3.0 });
+                let raw = T::raw_step::<false>(&mut pid.clone(), r, y, T::ZERO, None).is_some();
+                general += usize::from(!raw);
+                let u = pid.update(r, y);
+                y = y.add(a.mul(u.sub(y)));
+            }
+            assert!((y.to_f64() + 3.0).abs() < 0.01, "{y:?}");
+            general
+        }
+        assert_eq!(
+            run::<I16F16>(),
+            1,
+            "only the first sample takes the general path"
+        );
+        assert_eq!(run::<I32F32>(), 1);
+        assert_eq!(run::<I8F24>(), 1);
+    }
+
+    proptest! {
+        #![proptest_config(cases())]
+
+        /// The raw-integer path is the checked update, bit for bit — outputs, states and
+        /// faults — for `FixedI32` and `FixedI64` at two fraction widths each, over
+        /// configurations of every kind and scale and inputs of every magnitude (saturating
+        /// ones included), with feed-forward, tracking, manual mode and resets between.
+        #[test]
+        fn the_raw_path_is_the_checked_update_bit_for_bit(config in configs(), ops in ops()) {
+            for result in [
+                same_as_checked::<I16F16>(&config, &ops),
+                same_as_checked::<I8F24>(&config, &ops),
+                same_as_checked::<I32F32>(&config, &ops),
+                same_as_checked::<I48F16>(&config, &ops),
+            ] {
+                prop_assert!(result.is_ok(), "{}", result.err().unwrap_or_default());
+            }
+        }
+
+        /// Every sample of a started controller in automatic against the controller's formulas
+        /// in `f64` (unrounded, from the same coefficients and state): the output and the new
+        /// I and D within the rounding the fixed-point products can add (half an LSB each,
+        /// carried through the coefficients: for u, ½·|kp| + ½·|bd| + 2 LSB) where every
+        /// value the update forms stays within the type's range; where one leaves it (by more
+        /// than 10⁻⁶ of the range), the overflow fault is raised, the output held and the state
+        /// kept — saturation, never a wrapped or clipped result.
+        #[test]
+        fn each_sample_follows_the_f64_formulas_or_is_held_on_overflow(
+            config in configs(),
+            first in (any::<i64>(), 16..64u8, any::<i64>(), 16..64u8),
+            samples in prop::collection::vec(
+                (
+                    any::<i64>(),
+                    0..64u8,
+                    any::<i64>(),
+                    0..64u8,
+                    prop::option::weighted(
+                        0.2,
+                        (any::<i64>(), 0..64u8, prop::option::of((any::<i64>(), 0..64u8))),
+                    ),
+                ),
+                1..60,
+            ),
+        ) {
+            for result in [
+                follows_the_model::<I16F16>(&config, first, &samples),
+                follows_the_model::<I8F24>(&config, first, &samples),
+                follows_the_model::<I32F32>(&config, first, &samples),
+                follows_the_model::<I48F16>(&config, first, &samples),
+            ] {
+                prop_assert!(result.is_ok(), "{}", result.err().unwrap_or_default());
+            }
+        }
+    }
+}
