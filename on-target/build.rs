@@ -12,6 +12,12 @@ fn main() {
         "memory-an386.x"
     };
     let _ = fs::copy(memory, out.join("memory.x"));
+    // `cfg(micro_bit)`: 16 KiB of RAM, too little for the 256-entry timer queue and tracker of
+    // the `cycles` firmware.
+    println!("cargo:rustc-check-cfg=cfg(micro_bit)");
+    if target.starts_with("thumbv6m") {
+        println!("cargo:rustc-cfg=micro_bit");
+    }
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed=memory-microbit.x");
     println!("cargo:rerun-if-changed=memory-an386.x");

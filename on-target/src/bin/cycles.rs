@@ -1,7 +1,8 @@
-//! Instructions per operation on the Cortex-M4F: each hot path runs N times, then 2N times,
-//! between calls of `marker`; `on-target/cycles` runs this single-stepped under QEMU, counts the
-//! instructions between markers and reports (count(2N) − count(N)) / N, which cancels the set-up
-//! and leaves the operation and its loop.
+//! Instructions per operation on the Cortex-M4F and the Cortex-M0: each hot path runs N times,
+//! then 2N times, between calls of `marker`; `on-target/cycles` runs this single-stepped under
+//! QEMU, counts the instructions between markers and reports (count(2N) − count(N)) / N, which
+//! cancels the set-up and leaves the operation and its loop. On the M0 (no FPU) `f32` is soft
+//! float: the rows of `Pid<I16F16>` against `Pid<f32>` there are the reason fixed point exists.
 #![no_std]
 #![no_main]
 
@@ -9,10 +10,9 @@ use core::hint::black_box;
 
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
+use fixed::types::I16F16;
 use panic_semihosting as _;
-use regler_chain_tracker::{DistanceTable, Tracker};
-use regler_pid::{Config, Kind, Pid};
-use regler_scan_cycle::TimerQueue;
+use regler_pid::{Config, Kind, Pid, Scalar};
 use regler_trolley_id::decode;
 
 const N: u32 = 200;
@@ -49,6 +49,18 @@ fn regler_sample(pid: &mut Pid<f32>, y: f32) -> f32 {
     pid.update(1.0, y)
 }
 
+/// One regler sample in fixed point out of line.
+#[inline(never)]
+fn fixed_sample(pid: &mut Pid<I16F16>, y: I16F16) -> I16F16 {
+    pid.update(I16F16::ONE, y)
+}
+
+/// No controller in fixed point, out of line: the output is the error.
+#[inline(never)]
+fn no_controller_fixed(y: I16F16) -> I16F16 {
+    Scalar::sub(I16F16::ONE, y)
+}
+
 /// One `pid` crate sample out of line.
 #[inline(never)]
 fn anchor_sample(pid: &mut pid::Pid<f32>, y: f32) -> f32 {
@@ -64,12 +76,30 @@ fn fail() -> ! {
 }
 
 #[entry]
+fn main() -> ! {
+    hprintln!("n {}", N);
+    // One function per section, out of line, so that their states do not share one stack
+    // frame. The M0 (micro:bit) has 16 KiB of RAM: the 256-entry timer queue and tracker do not
+    // fit beside the rest, so its table has the controllers and the decoder.
+    pid_rows();
+    #[cfg(not(micro_bit))]
+    timer_queue_rows();
+    #[cfg(not(micro_bit))]
+    tracker_rows();
+    decode_rows();
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// The controllers: regler's in `f32` and `I16F16`, and the `pid` crate.
+#[inline(never)]
 #[allow(
     clippy::field_reassign_with_default,
     reason = "the contract's own spelling for an f32 config"
 )]
-fn main() -> ! {
-    hprintln!("n {}", N);
+fn pid_rows() {
     // The benches' loop: a controller with everything on and a first-order plant.
     let mut c = Config::<f32>::default();
     c.kind = Kind::PID;
@@ -92,11 +122,10 @@ fn main() -> ! {
         let u = regler.update(1.0, black_box(y));
         y += 0.05 * (u - y);
     });
+    // The anchor as its docs configure it and as `benches/src/pid_shapes.rs` does: the gains of
+    // the configuration above (kp = K, ki = K·h/Ti, kd = K·Td/h) and every limit the output's.
     let mut anchor = pid::Pid::new(1.0f32, 5.0);
-    anchor
-        .p(black_box(2.0f32), 100.0)
-        .i(0.02, 5.0)
-        .d(4.0, 100.0);
+    anchor.p(black_box(2.0f32), 5.0).i(0.02, 5.0).d(4.0, 5.0);
     let mut y = 0.0f32;
     twice("pid crate Pid<f32>::next_control_output + plant", || {
         let u = anchor.next_control_output(black_box(y)).output;
@@ -129,6 +158,32 @@ fn main() -> ! {
             y += 0.05 * (u - y);
         },
     );
+    // The same controller in fixed point (same configuration, the plant in I16F16 too), one
+    // call per sample; with the plant alone in I16F16 the difference is one update.
+    let Ok(mut fixed) = Pid::<I16F16>::new(&c) else {
+        fail()
+    };
+    let plant = I16F16::from_num(0.05);
+    let mut y = I16F16::ZERO;
+    twice(
+        "regler Pid<I16F16>::update + plant, one call per sample",
+        || {
+            let u = fixed_sample(&mut fixed, black_box(y));
+            y = Scalar::add(y, Scalar::mul(plant, Scalar::sub(u, y)));
+        },
+    );
+    let mut y = I16F16::ZERO;
+    twice("plant alone in I16F16, one call per sample", || {
+        let u = no_controller_fixed(black_box(y));
+        y = Scalar::add(y, Scalar::mul(plant, Scalar::sub(u, y)));
+    });
+}
+
+/// The timer queue.
+#[cfg(not(micro_bit))]
+#[inline(never)]
+fn timer_queue_rows() {
+    use regler_scan_cycle::TimerQueue;
     let mut queue: TimerQueue<u16, 256> = TimerQueue::new();
     for n in 0..256u16 {
         let _ = queue.insert(u32::from(n) + 1, n);
@@ -143,6 +198,13 @@ fn main() -> ! {
             }
         },
     );
+}
+
+/// The chain tracker.
+#[cfg(not(micro_bit))]
+#[inline(never)]
+fn tracker_rows() {
+    use regler_chain_tracker::{DistanceTable, Tracker};
     let Ok(table) = DistanceTable::<8>::new(1000, &[100, 200, 300, 400, 500, 600, 700, 800]) else {
         fail()
     };
@@ -162,13 +224,14 @@ fn main() -> ! {
             k = k.wrapping_add(1);
         },
     );
+}
+
+/// The trolley code.
+#[inline(never)]
+fn decode_rows() {
     let mut word = 0u16;
     twice("decode", || {
         black_box(decode(black_box(word)).is_ok());
         word = word.wrapping_add(1) & 0x1FFF;
     });
-    debug::exit(debug::EXIT_SUCCESS);
-    loop {
-        cortex_m::asm::wfi();
-    }
 }

@@ -135,11 +135,26 @@ impl Raw for i64 {
 }
 
 /// The rounded `FixedI32` product. A core with a 32 × 32 → 64 multiply (x86, Cortex-M3/M4/M7)
-/// forms it in one widening multiply.
-#[cfg(not(all(target_arch = "arm", not(target_feature = "thumb2"))))]
+/// forms it in one widening multiply ([`mul_round_wide`]).
+///
+/// ARMv6-M (Cortex-M0, M0+, M1) has none: there an `i64` product is a library call, and
+/// [`mul_round_split`] takes its place. Stable Rust exposes no target feature that says so, but
+/// ARMv6-M is also the only M profile without 32-bit atomics (`target_has_atomic = "32"`), which
+/// is what selects it (ARMv8-M Baseline, which has atomics but no long multiply, keeps the
+/// library call: slower, equally exact).
+#[inline(always)]
+fn mul_round_i32(a: i32, x: i32, frac: u32) -> i32 {
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+    if frac <= 16 {
+        return mul_round_split(a, x, frac);
+    }
+    mul_round_wide(a, x, frac)
+}
+
+/// (a·x + 2^(frac−1)) >> frac in one `i64` product.
 #[inline(always)]
 #[allow(clippy::cast_possible_truncation, reason = "the low bits, on purpose")]
-fn mul_round_i32(a: i32, x: i32, frac: u32) -> i32 {
+fn mul_round_wide(a: i32, x: i32, frac: u32) -> i32 {
     let wide = i64::from(a).wrapping_mul(i64::from(x));
     let half = if frac == 0 {
         0
@@ -149,12 +164,12 @@ fn mul_round_i32(a: i32, x: i32, frac: u32) -> i32 {
     (wide.wrapping_add(half) >> frac) as i32
 }
 
-/// The rounded `FixedI32` product on a core whose only multiply is 32 × 32 → 32 (Cortex-M0,
-/// M0+, M1: ARMv6-M), where an `i64` product is a library call: four 16 × 16 → 32 products of
-/// the halves, a = ah·2¹⁶ + al (ah signed, al unsigned), summed modulo 2³², which is exact
-/// whenever the result fits (it does on the gated path). For frac ≤ 16 only: the middle
-/// products are then shifted left, so the floor of the sum is the sum of the floors.
-#[cfg(all(target_arch = "arm", not(target_feature = "thumb2")))]
+/// (a·x + 2^(frac−1)) >> frac for frac ≤ 16 from four 16 × 16 → 32 products of the halves,
+/// a = ah·2¹⁶ + al (ah signed, al unsigned): a·x = ah·xh·2³² + (ah·xl + al·xh)·2¹⁶ + al·xl.
+/// With frac ≤ 16 the first two terms stay integers when shifted right by frac, so the floor
+/// of the sum is theirs plus the floor of the last; all summed modulo 2³², which is exact
+/// whenever the result fits (it does on the gated path) and never panics otherwise.
+#[cfg(any(test, all(target_arch = "arm", not(target_has_atomic = "32"))))]
 #[inline(always)]
 #[allow(
     clippy::cast_possible_truncation,
@@ -162,28 +177,26 @@ fn mul_round_i32(a: i32, x: i32, frac: u32) -> i32 {
     clippy::cast_possible_wrap,
     reason = "halves and low words, on purpose"
 )]
-fn mul_round_i32(a: i32, x: i32, frac: u32) -> i32 {
-    if frac > 16 {
-        let wide = i64::from(a).wrapping_mul(i64::from(x));
-        let half = 1i64.wrapping_shl(frac.wrapping_sub(1));
-        return (wide.wrapping_add(half) >> frac) as i32;
-    }
+fn mul_round_split(a: i32, x: i32, frac: u32) -> i32 {
     let (ah, al) = (a >> 16, (a as u32) & 0xFFFF);
     let (xh, xl) = (x >> 16, (x as u32) & 0xFFFF);
     // |ah·xl|, |al·xh| < 2³¹ and al·xl + 2¹⁵ < 2³²: each product is exact in 32 bits.
-    let high = ah.wrapping_mul(xh);
+    let high = if frac == 0 {
+        0
+    } else {
+        ah.wrapping_mul(xh).wrapping_shl(32u32.wrapping_sub(frac))
+    };
     let middle = ah
         .wrapping_mul(xl as i32)
-        .wrapping_add((al as i32).wrapping_mul(xh));
+        .wrapping_add((al as i32).wrapping_mul(xh))
+        .wrapping_shl(16u32.wrapping_sub(frac));
     let half = if frac == 0 {
         0
     } else {
         1u32.wrapping_shl(frac.wrapping_sub(1))
     };
     let low = (al.wrapping_mul(xl).wrapping_add(half) >> frac) as i32;
-    high.wrapping_shl(32u32.wrapping_sub(frac))
-        .wrapping_add(middle.wrapping_shl(16u32.wrapping_sub(frac)))
-        .wrapping_add(low)
+    high.wrapping_add(middle).wrapping_add(low)
 }
 
 /// The common sample of a started controller in automatic on the raw integers, or `None` (the
@@ -739,6 +752,44 @@ mod tests {
         );
         assert_eq!(run::<I32F32>(), 1);
         assert_eq!(run::<I8F24>(), 1);
+    }
+
+    /// The split product of ARMv6-M is the wide one wherever the result fits, for every
+    /// fraction width it serves (0..=16): operands of every magnitude, from a xorshift, and the
+    /// ends of the range.
+    #[test]
+    fn the_split_product_is_the_wide_one() {
+        let mut x: u32 = 0x1234_5678;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x
+        };
+        let ends = [0, 1, -1, i32::MAX, i32::MIN, 1 << 16, -(1 << 16), 0xFFFF, -0xFFFF];
+        for frac in 0..=16u32 {
+            let mut pairs: Vec<(i32, i32)> = Vec::new();
+            for &a in &ends {
+                for &b in &ends {
+                    pairs.push((a, b));
+                }
+            }
+            for _ in 0..50_000 {
+                let (a, b) = (next(), next());
+                pairs.push(((a as i32) >> (b % 32), (b as i32) >> (a % 32)));
+            }
+            for (a, b) in pairs {
+                let exact = (i64::from(a) * i64::from(b) + ((1i64 << frac) >> 1)) >> frac;
+                if i32::try_from(exact).is_ok() {
+                    assert_eq!(
+                        super::mul_round_split(a, b, frac),
+                        super::mul_round_wide(a, b, frac),
+                        "{a} · {b} >> {frac}"
+                    );
+                    assert_eq!(i64::from(super::mul_round_wide(a, b, frac)), exact);
+                }
+            }
+        }
     }
 
     proptest! {
