@@ -143,8 +143,8 @@ pub const STATE_BOUND: u16 = 100;
 /// A NaN or infinite set-point or measurement (the first sample included) holds the output, sets a
 /// [`Faults`] flag and leaves every state as it was, so the controller runs on as soon as the
 /// inputs are finite again; `update` never returns NaN or infinity. A `Pid<T>` holds 19 values of
-/// `T` and 2 bytes of flags, padded to `T`'s alignment: 80 bytes for `f32`, 160 for `f64` and
-/// `I32F32`.
+/// `T` and 3 bytes (flags, faults, the fixed-point gate), padded to `T`'s alignment: 80 bytes for
+/// `f32` and `I16F16`, 160 for `f64` and `I32F32`.
 ///
 /// ```
 /// use regler_pid::{Config, Kind, Pid};
@@ -902,8 +902,8 @@ mod tests {
 
     #[test]
     fn size_is_19_values_and_2_bytes_padded() {
-        // 19 values of T, then the flags (started, manual) and the faults (2 bytes), padded to
-        // T's alignment.
+        // 19 values of T, then the flags (started, manual), the faults and the fixed-point gate
+        // (3 bytes), padded to T's alignment.
         assert_eq!(core::mem::size_of::<Pid<f32>>(), 19 * 4 + 4);
         assert_eq!(core::mem::size_of::<Pid<f64>>(), 19 * 8 + 8);
     }

@@ -766,7 +766,17 @@ mod tests {
             x ^= x << 5;
             x
         };
-        let ends = [0, 1, -1, i32::MAX, i32::MIN, 1 << 16, -(1 << 16), 0xFFFF, -0xFFFF];
+        let ends = [
+            0,
+            1,
+            -1,
+            i32::MAX,
+            i32::MIN,
+            1 << 16,
+            -(1 << 16),
+            0xFFFF,
+            -0xFFFF,
+        ];
         for frac in 0..=16u32 {
             let mut pairs: Vec<(i32, i32)> = Vec::new();
             for &a in &ends {
