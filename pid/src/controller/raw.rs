@@ -309,27 +309,16 @@ pub(crate) fn gate<T: Scalar, R: Raw>(pid: &Pid<T>, lsb: f64, max: f64) -> u8 {
         let tracking = product(ao, ys.max(g) + v);
         let i = g + integral_step + tracking;
         let centre = product(slope, g) + i_mid + g;
-        [
-            g + g,
-            br,
-            br + g,
-            p,
-            p + g,
-            yd,
-            yd + g,
-            d_step,
-            d_raw,
-            v,
-            ys.max(g) + v,
-            integral_step,
-            tracking,
-            integral_step + tracking,
-            i,
-            centre,
-            centre + i,
-        ]
-        .into_iter()
-        .all(|x| x <= limit)
+        // Every bound is a sum of non-negative terms, so these six cover all the values above
+        // and their partial sums (b·r − y is br + g, P + I is below v, the centre and the new
+        // integral below their difference's bound, …).
+        (g + g)
+            .max(br + g)
+            .max(yd + g)
+            .max(d_raw)
+            .max(ys.max(g) + v)
+            .max(centre + i)
+            <= limit
     };
     let mut k = bits.saturating_sub(2);
     loop {
