@@ -706,6 +706,10 @@ mod tests {
     /// back-calculation and rate limit on ±5, a first-order plant) runs on the raw path after
     /// its first sample: the gate is wide enough for a working loop.
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "15 000 samples, each cloned: the properties cover it under Miri"
+    )]
     fn a_working_loop_takes_the_raw_path() {
         fn run<T: Scalar>() -> usize {
             let config = Config {
@@ -747,6 +751,10 @@ mod tests {
     /// fraction width it serves (0..=16): operands of every magnitude, from a xorshift, and the
     /// ends of the range.
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "850 000 products of plain integer arithmetic: nothing for Miri"
+    )]
     fn the_split_product_is_the_wide_one() {
         let mut x: u32 = 0x1234_5678;
         let mut next = || {
