@@ -224,9 +224,9 @@ pub fn sizes_on_a_32_bit_core() -> Outcome {
     use core::mem::size_of;
     check!(size_of::<usize>() == 4);
     check!(size_of::<Conditioning<34>>() == 22 * 34);
-    // 3 KiB of wheel, 16 bytes of counters, 32 bytes per entry for a one-byte action (the
-    // action, a u64 deadline, a u64 generation and links, padded to the u64 alignment).
-    check!(size_of::<TimerQueue<u8, 64>>() == 3072 + 16 + 64 * 32);
+    // 2 816 bytes of slot heads, 16 bytes of counters, 24 bytes per entry for a one-byte action
+    // (the action, a u32 deadline, a u64 generation and links, padded to the u64 alignment).
+    check!(size_of::<TimerQueue<u8, 64>>() == 2816 + 16 + 64 * 24);
     Ok(())
 }
 

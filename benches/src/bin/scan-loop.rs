@@ -1,6 +1,7 @@
 //! Instruction counts for the scan-cycle hot paths:
 //! `scan-loop <wheel|count-down> <16|256|4096> <ticks>` or `scan-loop cycle 0 <cycles>`;
-//! use with `../shared/tools/instructions-per-op N -- target/release/scan-loop wheel 4096 {N}`.
+//! use with `scripts/instructions-per-op 131072 target/release/scan-loop wheel 4096 {N}` (a
+//! multiple of 256 ticks: the queue moves a 256-tick block's timers down once per block).
 
 use std::hint::black_box;
 use std::process::ExitCode;

@@ -12,10 +12,16 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use fixed::types::I16F16;
 use panic_semihosting as _;
+use regler_panel_link::highway::{
+    Controller, ControllerConfig, Cycle, Dataway, MAX_MESSAGE, Message, WAIT,
+};
 use regler_pid::{Config, Kind, Pid, Scalar};
 use regler_trolley_id::decode;
 
-const N: u32 = 200;
+/// Operations per pass: a multiple of 256, so that both passes of an operation with work done
+/// once per 256 calls (the timer queue moves the next 256-tick block's timers down once per
+/// block; the highway traffic below repeats every 256 bytes) hold it in proportion.
+const N: u32 = 256;
 
 /// Where the trace is cut; `on-target/cycles` finds its address with `llvm-nm`.
 #[unsafe(no_mangle)]
@@ -87,6 +93,7 @@ fn main() -> ! {
     #[cfg(not(micro_bit))]
     tracker_rows();
     decode_rows();
+    highway_rows();
     debug::exit(debug::EXIT_SUCCESS);
     loop {
         cortex_m::asm::wfi();
@@ -145,10 +152,13 @@ fn pid_rows() {
     // The same two, called out of line once per sample, as a timer interrupt calls them.
     regler.reset();
     let mut y = 0.0f32;
-    twice("regler Pid<f32>::update + plant, one call per sample", || {
-        let u = regler_sample(&mut regler, black_box(y));
-        y += 0.05 * (u - y);
-    });
+    twice(
+        "regler Pid<f32>::update + plant, one call per sample",
+        || {
+            let u = regler_sample(&mut regler, black_box(y));
+            y += 0.05 * (u - y);
+        },
+    );
     anchor.reset_integral_term();
     let mut y = 0.0f32;
     twice(
@@ -234,4 +244,85 @@ fn decode_rows() {
         black_box(decode(black_box(word)).is_ok());
         word = word.wrapping_add(1) & 0x1FFF;
     });
+}
+
+/// The serial highway's crate controller, one byte clock per call.
+#[inline(never)]
+fn highway_rows() {
+    // The serial highway's crate controller (crate 7), one byte clock per call, on 256 bytes of
+    // mixed traffic repeated: commands (a third to crate 7, which runs a dataway cycle and
+    // answers), replies and demands made as `benches/src/highway.rs` makes them, back to back,
+    // WAIT after the last whole message.
+    struct Registers([u32; 32]);
+    impl Dataway for Registers {
+        fn cycle(&mut self, n: u8, _a: u8, f: u8, write: Option<u32>) -> Cycle {
+            let reg = &mut self.0[usize::from(n & 31)];
+            if let Some(w) = write {
+                *reg = w;
+            }
+            Cycle {
+                read: *reg,
+                x: true,
+                q: f < 8,
+            }
+        }
+    }
+    let mut traffic = [WAIT; 256];
+    let (mut at, mut x, mut k) = (0usize, 0x2545_F491_4F6C_DD1Du64, 0u32);
+    loop {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        let f = (x % 32) as u8;
+        let crate_address = if k % 3 == 0 {
+            7
+        } else {
+            1 + (x >> 8) as u8 % 62
+        };
+        let message = match k % 4 {
+            0 | 1 => Message::Command {
+                crate_address,
+                station: (x >> 16) as u8 % 32,
+                subaddress: (x >> 24) as u8 % 16,
+                function: f,
+                data: (16..=23)
+                    .contains(&f)
+                    .then_some((x >> 32) as u32 & 0xFF_FFFF),
+            },
+            2 => Message::Reply {
+                crate_address,
+                status: regler_panel_link::highway::Status::from_bits((x >> 40) as u8),
+                data: (x & 1 == 0).then_some((x >> 12) as u32 & 0xFF_FFFF),
+            },
+            _ => Message::Demand {
+                crate_address,
+                sgl: 1 + (x >> 20) as u8 % 31,
+            },
+        };
+        let mut buf = [0u8; MAX_MESSAGE];
+        let Ok(len) = message.encode(&mut buf) else {
+            fail()
+        };
+        if at + len > traffic.len() {
+            break;
+        }
+        traffic[at..at + len].copy_from_slice(&buf[..len]);
+        at += len;
+        k += 1;
+    }
+    let Ok(mut controller) = Controller::new(ControllerConfig {
+        address: 7,
+        demand_repeat: 0,
+    }) else {
+        fail()
+    };
+    let mut crate_ = Registers([0; 32]);
+    let mut byte = 0usize;
+    twice(
+        "highway Controller::clock, one byte of mixed traffic",
+        || {
+            black_box(controller.clock(black_box(traffic[byte]), &mut crate_));
+            byte = (byte + 1) % traffic.len();
+        },
+    );
 }
