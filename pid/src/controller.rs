@@ -183,7 +183,11 @@ pub struct Pid<T> {
     i_mid: T,
     /// The half-width of the integral's bounds: (ymax − ymin)/2 + [`STATE_BOUND`] scales.
     i_half: T,
-    /// [`STATE_BOUND`] scales: the derivative term's bound either way.
+    /// [`STATE_BOUND`] scales: the derivative term's bound either way (read it with
+    /// [`derivative_bound`](Pid::derivative_bound)). For floats its sign also admits the fast
+    /// path of [`step`](Pid::step): negative while the controller is started and automatic,
+    /// positive otherwise (see [`set_flags`](Pid::set_flags)), so that one compare there stands
+    /// for the mode test and both state bounds.
     d_bound: T,
     i: T,
     d: T,
@@ -349,6 +353,15 @@ fn hold<T: Scalar, F: Real>(
             exact,
         })
     }
+}
+
+/// `x` limited to `lo..=hi` (ordered), as [`Scalar::clamp_within`], except that a NaN becomes
+/// a limit: for floats one `max` and one `min` that may read the limits from memory (a clamp
+/// that keeps NaN needs them in registers). For values whose NaN is caught elsewhere.
+#[inline(always)]
+fn limit<T: PartialOrd>(x: T, lo: T, hi: T) -> T {
+    let above = if x > lo { x } else { lo };
+    if above < hi { above } else { hi }
 }
 
 /// How close to the end of `T`'s range a term may reach before a [`Station`](crate::Station)
@@ -522,6 +535,28 @@ impl<T: Scalar> Pid<T> {
         self.i_mid = k.i_mid;
         self.i_half = k.i_half;
         self.d_bound = k.d_bound;
+        self.set_flags(self.flags);
+    }
+
+    /// Sets the mode flags ([`STARTED`], [`MANUAL`]) and, for floats, the fast path's
+    /// admission (the sign of `d_bound`) with them.
+    #[inline(always)]
+    fn set_flags(&mut self, flags: u8) {
+        self.flags = flags;
+        if !T::SATURATES {
+            let bound = self.d_bound.abs();
+            self.d_bound = if flags == STARTED { bound.neg() } else { bound };
+        }
+    }
+
+    /// The derivative term's bound, [`STATE_BOUND`] output scales.
+    #[inline(always)]
+    fn derivative_bound(&self) -> T {
+        if T::SATURATES {
+            self.d_bound
+        } else {
+            self.d_bound.abs()
+        }
     }
 
     /// One sample: the output for set-point `r` and measurement `y`.
@@ -565,7 +600,12 @@ impl<T: Scalar> Pid<T> {
     /// prologue and epilogue on every sample).
     #[inline(always)]
     fn step<const FEEDFORWARD: bool>(&mut self, r: T, y: T, feedforward: T, track: Option<T>) -> T {
-        if self.flags == STARTED {
+        if !T::SATURATES {
+            // Floats: see `step_float`.
+            if let Some(u) = self.step_float::<FEEDFORWARD>(r, y, feedforward, track) {
+                return u;
+            }
+        } else if self.flags == STARTED {
             let s = self.compute::<FEEDFORWARD>(r, y, feedforward, track, self.yd_old, false);
             // One test accepts the sample: the new integral lies inside its bounds, which move
             // with the set-point. It also proves every value finite: a NaN or infinite r or y
@@ -579,6 +619,67 @@ impl<T: Scalar> Pid<T> {
             }
         }
         self.step_general::<FEEDFORWARD>(r, y, feedforward, track)
+    }
+
+    /// The fast path for floats: the sample of [`compute`](Pid::compute), stored and its output
+    /// returned if it is admitted, or `None` (nothing stored) for
+    /// [`step_general`](Pid::step_general) to compute again.
+    ///
+    /// One compare admits it: −(|centre − I| + |D|) ≥ `d_bound`, where `d_bound` is
+    /// −[`STATE_BOUND`] scales while started and automatic and positive otherwise (so nothing
+    /// passes). That is the mode test, the derivative's bound (here, D is not clamped: an
+    /// admitted D needs no clamp) and the integral's (the bound on |D| is the smaller of the
+    /// two, and a rounded sum of magnitudes is never below either), and it proves every value
+    /// finite as the test of `step` does: a NaN or infinite r or y makes P non-finite (0·∞ is
+    /// NaN), and a non-finite v reaches I through ao·(u − v). Only states far outside any
+    /// working loop's (|I − centre| + |D| beyond 100 output scales) take the general path
+    /// that the separate bounds would have let through.
+    ///
+    /// The output limits drop a NaN (one `maxss`/`minss` each on x86, with the limit read from
+    /// memory): a NaN v is caught through I all the same. I is computed as
+    /// I − (bi·(y − r) + ao·(v − u)), the same number as the reference's I + bi·(r − y) +
+    /// ao·(u − v) (a negation is exact in every rounding step), so that neither y nor v needs
+    /// a copy on two-operand machines.
+    #[inline(always)]
+    fn step_float<const FEEDFORWARD: bool>(
+        &mut self,
+        r: T,
+        y: T,
+        feedforward: T,
+        track: Option<T>,
+    ) -> Option<T> {
+        let p = self.kp.mul(self.b.mul(r).sub(y));
+        let yd = y.sub(self.c.mul(r));
+        let d = self
+            .ad
+            .mul(self.d)
+            .sub(self.bd.mul(yd.sub(self.yd_old)))
+            .flush_tiny();
+        let mut v = p.add(self.i).add(d);
+        if FEEDFORWARD {
+            v = v.add(feedforward);
+        }
+        let u = limit(
+            v.clamp_within(self.u_old.sub(self.dymax), self.u_old.add(self.dymax)),
+            self.ymin,
+            self.ymax,
+        );
+        let applied = track.unwrap_or(u);
+        let i = self
+            .i
+            .sub(self.bi.mul(y.sub(r)).add(self.ao.mul(v.sub(applied))));
+        let centre = self.integral_centre(r, self.bounds_feedforward::<FEEDFORWARD>(feedforward));
+        let reach = centre.sub(i).abs().neg().sub(d.abs());
+        if reach >= self.d_bound {
+            self.i = i;
+            self.d = d;
+            self.yd_old = yd;
+            self.r_old = r;
+            self.u_old = applied;
+            Some(u)
+        } else {
+            None
+        }
     }
 
     /// Every sample the fast path of [`step`](Pid::step) does not take: the first one (its
@@ -602,10 +703,15 @@ impl<T: Scalar> Pid<T> {
         let manual = self.flags & MANUAL != 0;
         let mut s = self.compute::<FEEDFORWARD>(r, y, feedforward, track, yd_old, manual);
         let centre = self.integral_centre(r, self.bounds_feedforward::<FEEDFORWARD>(feedforward));
-        let bounded = centre.add(
-            s.i.sub(centre)
-                .clamp_within(T::ZERO.sub(self.i_half), self.i_half),
-        );
+        // Inside its bounds, I is kept as computed (as the fast path keeps it).
+        let bounded = if centre.sub(s.i).magnitude_within(self.i_half) {
+            s.i
+        } else {
+            centre.add(
+                s.i.sub(centre)
+                    .clamp_within(T::ZERO.sub(self.i_half), self.i_half),
+            )
+        };
         // A finite I implies finite inputs and v (see `step`; in manual I = u − P − D); the
         // bounds themselves may overflow when an absurd set-point moves them.
         if s.saturated || !T::both_finite(s.i, bounded) {
@@ -614,7 +720,7 @@ impl<T: Scalar> Pid<T> {
         }
         s.i = bounded;
         // The fast path runs only once started, so only this path marks it.
-        self.flags |= STARTED;
+        self.set_flags(self.flags | STARTED);
         self.commit(s, r, track)
     }
 
@@ -646,7 +752,10 @@ impl<T: Scalar> Pid<T> {
                 &mut o,
             )
             .flush_tiny()
-            .clamp_within(T::ZERO.sub(self.d_bound), self.d_bound);
+            .clamp_within(
+                T::ZERO.sub(self.derivative_bound()),
+                self.derivative_bound(),
+            );
         if manual {
             let u = self.u_old;
             return Sample {
@@ -803,7 +912,7 @@ impl<T: Scalar> Pid<T> {
             return Err(ValueError::NotFinite);
         }
         self.u_old = u.clamp_within(self.ymin, self.ymax);
-        self.flags |= MANUAL;
+        self.set_flags(self.flags | MANUAL);
         Ok(())
     }
 
@@ -814,7 +923,7 @@ impl<T: Scalar> Pid<T> {
             let p = self.proportional(self.r_old, self.last_measurement());
             self.i = self.bounded_integral(self.u_old.sub(p).sub(self.d));
         }
-        self.flags &= !MANUAL;
+        self.set_flags(self.flags & !MANUAL);
     }
 
     /// Auto or manual.
@@ -862,7 +971,7 @@ impl<T: Scalar> Pid<T> {
         self.d = T::ZERO;
         self.yd_old = T::ZERO;
         self.r_old = T::ZERO;
-        self.flags = 0;
+        self.set_flags(0);
         self.faults = Faults::default();
         self.u_old = T::ZERO.clamp_within(self.ymin, self.ymax);
     }

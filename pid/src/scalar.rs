@@ -79,6 +79,20 @@ pub trait Scalar: Copy + PartialOrd + core::fmt::Debug {
         let _ = saturated;
         self.mul(rhs)
     }
+    /// −`self` (saturating for fixed point: −`MIN` is `MAX`). Exact for floats, whose sign
+    /// bit it flips (−0 for 0, unlike `ZERO − self`).
+    #[inline(always)]
+    #[must_use]
+    fn neg(self) -> Self {
+        Self::ZERO.sub(self)
+    }
+    /// |`self`| (saturating for fixed point: |`MIN`| is `MAX`). Exact for floats; NaN stays
+    /// NaN.
+    #[inline(always)]
+    #[must_use]
+    fn abs(self) -> Self {
+        if self < Self::ZERO { self.neg() } else { self }
+    }
     /// Whether the value is a finite number (always true for fixed point).
     fn is_finite(self) -> bool;
     /// Whether both values are finite (one test where the type allows it).
@@ -137,6 +151,14 @@ macro_rules! float_ops {
         #[inline(always)]
         fn mul(self, rhs: $t) -> $t {
             self * rhs
+        }
+        #[inline(always)]
+        fn neg(self) -> $t {
+            -self
+        }
+        #[inline(always)]
+        fn abs(self) -> $t {
+            <$t>::abs(self)
         }
         #[inline(always)]
         fn is_finite(self) -> bool {
