@@ -192,8 +192,9 @@ pub struct Pid<T> {
     i: T,
     d: T,
     r_old: T,
-    /// y − c·r of the last sample: the derivative's input (and with `r_old` the last
-    /// measurement, for a bumpless change).
+    /// The derivative's input of the last sample as [`derivative_input`](Pid::derivative_input)
+    /// stores it: y − c·r, for floats c·r − y (with `r_old` also the last measurement, for a
+    /// bumpless change).
     yd_old: T,
     u_old: T,
     /// [`STARTED`] and [`MANUAL`] in one byte, so that the common case (automatic and
@@ -649,11 +650,12 @@ impl<T: Scalar> Pid<T> {
         track: Option<T>,
     ) -> Option<T> {
         let p = self.kp.mul(self.b.mul(r).sub(y));
-        let yd = y.sub(self.c.mul(r));
+        let yd = self.derivative_input(r, y);
+        // The change of y − c·r: yd, yd_old are its negations (see `derivative_input`).
         let d = self
             .ad
             .mul(self.d)
-            .sub(self.bd.mul(yd.sub(self.yd_old)))
+            .sub(self.bd.mul(self.yd_old.sub(yd)))
             .flush_tiny();
         let mut v = p.add(self.i).add(d);
         if FEEDFORWARD {
@@ -698,7 +700,7 @@ impl<T: Scalar> Pid<T> {
         let yd_old = if self.started() {
             self.yd_old
         } else {
-            y.sub(self.c.mul(r))
+            self.derivative_input(r, y)
         };
         let manual = self.flags & MANUAL != 0;
         let mut s = self.compute::<FEEDFORWARD>(r, y, feedforward, track, yd_old, manual);
@@ -743,14 +745,19 @@ impl<T: Scalar> Pid<T> {
         let p = self
             .kp
             .mul_noting(self.b.mul_noting(r, &mut o).sub_noting(y, &mut o), &mut o);
-        let yd = y.sub_noting(self.c.mul_noting(r, &mut o), &mut o);
+        let cr = self.c.mul_noting(r, &mut o);
+        // The derivative's input as stored, and its change y − c·r − (y_old − c·r_old).
+        let (yd, change) = if T::SATURATES {
+            let yd = y.sub_noting(cr, &mut o);
+            (yd, yd.sub_noting(yd_old, &mut o))
+        } else {
+            let yd = cr.sub(y);
+            (yd, yd_old.sub(yd))
+        };
         let d = self
             .ad
             .mul_noting(self.d, &mut o)
-            .sub_noting(
-                self.bd.mul_noting(yd.sub_noting(yd_old, &mut o), &mut o),
-                &mut o,
-            )
+            .sub_noting(self.bd.mul_noting(change, &mut o), &mut o)
             .flush_tiny()
             .clamp_within(
                 T::ZERO.sub(self.derivative_bound()),
@@ -878,7 +885,7 @@ impl<T: Scalar> Pid<T> {
             let p_after = self.proportional(self.r_old, y_old);
             i = i.add(p_before).sub(p_after);
             // The derivative's input under the new weight c: steady readings stay steady.
-            self.yd_old = y_old.sub(self.c.mul(self.r_old));
+            self.yd_old = self.derivative_input(self.r_old, y_old);
         }
         if !config.kind.has_d() {
             if config.kind.has_i() {
@@ -899,7 +906,22 @@ impl<T: Scalar> Pid<T> {
     /// The last sample's measurement, from the derivative's input y − c·r (exact where c·r is,
     /// always for c = 0; within rounding otherwise).
     fn last_measurement(&self) -> T {
-        self.yd_old.add(self.c.mul(self.r_old))
+        let cr = self.c.mul(self.r_old);
+        if T::SATURATES {
+            self.yd_old.add(cr)
+        } else {
+            cr.sub(self.yd_old)
+        }
+    }
+
+    /// The derivative's input y − c·r as `yd_old` stores it. Floats store its negation c·r − y
+    /// (the same number with the sign flipped: negation is exact), which a two-operand machine
+    /// computes without a copy of y; fixed point stores y − c·r (a saturated negation would
+    /// not be exact).
+    #[inline(always)]
+    fn derivative_input(&self, r: T, y: T) -> T {
+        let cr = self.c.mul(r);
+        if T::SATURATES { y.sub(cr) } else { cr.sub(y) }
     }
 
     fn proportional(&self, r: T, y: T) -> T {
@@ -1282,5 +1304,141 @@ mod tests {
             "rate-limited from 0"
         );
         assert!(!s.faults().any());
+    }
+
+    /// A sample of the property tests: mostly sane readings, now and then a spike, a NaN or an
+    /// infinity.
+    fn reading() -> impl proptest::strategy::Strategy<Value = f64> {
+        use proptest::prelude::prop_oneof;
+        prop_oneof![
+            8 => -100.0f64..100.0,
+            1 => proptest::sample::select(vec![1e4, -1e4, 1e9, -1e9, 1e30, -1e30, 3e38, -3e38, 1e300]),
+            1 => proptest::sample::select(vec![f64::NAN, f64::INFINITY, f64::NEG_INFINITY]),
+        ]
+    }
+
+    fn any_config() -> impl proptest::strategy::Strategy<Value = Config> {
+        use proptest::prelude::{Just, prop, prop_oneof};
+        use proptest::strategy::Strategy;
+        (
+            (
+                prop::sample::select(Kind::ALL.to_vec()),
+                proptest::bool::ANY,
+                0.01f64..20.0,
+                0.1f64..100.0,
+                0.0f64..20.0,
+                1.0f64..20.0,
+            ),
+            (
+                0.0f64..1.0,
+                0.0f64..1.0,
+                prop::option::of(0.51f64..50.0),
+                0.01f64..5.0,
+            ),
+            (
+                -50.0f64..0.0,
+                0.0f64..50.0,
+                prop::option::of(prop_oneof![Just(0.0), 0.01f64..10.0]),
+            ),
+        )
+            .prop_map(
+                |((kind, reverse, k, ti, td, n), (b, c, tt_samples, h), (ymin, ymax, dymax))| {
+                    Config {
+                        kind,
+                        action: if reverse {
+                            Action::Reverse
+                        } else {
+                            Action::Direct
+                        },
+                        k,
+                        ti,
+                        td,
+                        n,
+                        b,
+                        c,
+                        tt: tt_samples.map(|m| m * h),
+                        h,
+                        ymin,
+                        ymax,
+                        dymax,
+                    }
+                },
+            )
+    }
+
+    /// One sample through `update` (or `update_with`) and the same sample through the general
+    /// path on a copy: the same output and the same state, flags and faults. `event` 0..=5 is
+    /// a plain sample, 6 one with feed-forward and tracking, 7 a switch to manual, 8 back to
+    /// automatic.
+    fn fast_equals_general<T: Scalar>(pid: &mut Pid<T>, event: u8, r: f64, y: f64, extra: f64) {
+        let (rt, yt, xt) = (T::from_f64(r), T::from_f64(y), T::from_f64(extra));
+        match event {
+            7 => {
+                let _ = pid.set_manual(xt);
+                return;
+            }
+            8 => {
+                pid.set_auto();
+                return;
+            }
+            _ => {}
+        }
+        let mut general = pid.clone();
+        let (fast, slow) = if event == 6 && extra.is_finite() {
+            let inputs = Inputs {
+                feedforward: xt,
+                track: (r > 0.0).then_some(xt),
+            };
+            (
+                pid.update_with(rt, yt, inputs),
+                general.step_general::<true>(rt, yt, inputs.feedforward, inputs.track),
+            )
+        } else {
+            (
+                pid.update(rt, yt),
+                general.step_general::<false>(rt, yt, T::ZERO, None),
+            )
+        };
+        assert_eq!(fast, slow, "output for r = {r:e}, y = {y:e}");
+        assert_eq!(*pid, general, "state after r = {r:e}, y = {y:e}");
+    }
+
+    /// The fast path of `update` is a shortcut, never another algorithm: for any configuration,
+    /// any sequence of readings (spikes, NaN and infinities among them) and mode switches, it
+    /// gives the output and leaves the state that the general path gives for the same sample, in
+    /// `f32` and `f64`. It fails if the fast path admits a sample the general path would bound
+    /// (an integral or derivative state beyond `STATE_BOUND`, a non-finite value), mis-signs a
+    /// term, or runs in manual mode or on the first sample.
+    #[test]
+    fn the_fast_path_is_the_general_path() {
+        use proptest::prelude::{ProptestConfig, prop, proptest};
+        proptest!(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 500 }), |(
+            config in any_config(),
+            samples in prop::collection::vec((0u8..9, reading(), reading(), reading()), 1..120),
+        )| {
+            let mut single = Pid::<f32>::new(&config).unwrap();
+            let mut double = Pid::<f64>::new(&config).unwrap();
+            for &(event, r, y, extra) in &samples {
+                fast_equals_general(&mut single, event, r, y, extra);
+                fast_equals_general(&mut double, event, r, y, extra);
+            }
+        });
+    }
+
+    #[test]
+    fn neg_and_abs_are_exact_for_floats_and_saturate_for_fixed() {
+        for x in [0.0f32, -0.0, 1.5, -2.5, f32::MAX, f32::MIN, f32::INFINITY] {
+            assert_eq!(Scalar::neg(x).to_bits(), (-x).to_bits());
+            assert_eq!(Scalar::abs(x).to_bits(), x.abs().to_bits());
+        }
+        assert!(Scalar::abs(f64::NAN).is_nan());
+        #[cfg(feature = "fixed")]
+        {
+            use fixed::types::I16F16;
+            assert_eq!(Scalar::neg(I16F16::MIN), I16F16::MAX);
+            assert_eq!(Scalar::abs(I16F16::MIN), I16F16::MAX);
+            assert_eq!(Scalar::abs(I16F16::from_num(-3)), I16F16::from_num(3));
+            assert_eq!(Scalar::neg(I16F16::from_num(2)), I16F16::from_num(-2));
+        }
     }
 }
