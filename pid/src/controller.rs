@@ -626,15 +626,16 @@ impl<T: Scalar> Pid<T> {
     /// returned if it is admitted, or `None` (nothing stored) for
     /// [`step_general`](Pid::step_general) to compute again.
     ///
-    /// One compare admits it: −(|centre − I| + |D|) ≥ `d_bound`, where `d_bound` is
-    /// −[`STATE_BOUND`] scales while started and automatic and positive otherwise (so nothing
-    /// passes). That is the mode test, the derivative's bound (here, D is not clamped: an
-    /// admitted D needs no clamp) and the integral's (the bound on |D| is the smaller of the
-    /// two, and a rounded sum of magnitudes is never below either), and it proves every value
-    /// finite as the test of `step` does: a NaN or infinite r or y makes P non-finite (0·∞ is
-    /// NaN), and a non-finite v reaches I through ao·(u − v). Only states far outside any
-    /// working loop's (|I − centre| + |D| beyond 100 output scales) take the general path
-    /// that the separate bounds would have let through.
+    /// One compare admits it: −(|centre − I| + |D|) > `d_bound`, where `d_bound` is
+    /// −[`STATE_BOUND`] scales while started and automatic and +[`STATE_BOUND`] scales
+    /// otherwise (nothing passes, not even 0 when the scale is 0: the compare is strict). That
+    /// is the mode test, the derivative's bound (here, D is not clamped: an admitted D needs no
+    /// clamp) and the integral's (the bound on |D| is the smaller of the two, and a rounded sum
+    /// of magnitudes is never below either), and it proves every value finite as the test of
+    /// `step` does: a NaN or infinite r or y makes P non-finite (0·∞ is NaN), and a non-finite
+    /// v reaches I through ao·(u − v). Only states far outside any working loop's
+    /// (|I − centre| + |D| at or beyond 100 output scales) take the general path that the
+    /// separate bounds would have let through; it gives them the same result.
     ///
     /// The output limits drop a NaN (one `maxss`/`minss` each on x86, with the limit read from
     /// memory): a NaN v is caught through I all the same. I is computed as
@@ -672,7 +673,7 @@ impl<T: Scalar> Pid<T> {
             .sub(self.bi.mul(y.sub(r)).add(self.ao.mul(v.sub(applied))));
         let centre = self.integral_centre(r, self.bounds_feedforward::<FEEDFORWARD>(feedforward));
         let reach = centre.sub(i).abs().neg().sub(d.abs());
-        if reach >= self.d_bound {
+        if reach > self.d_bound {
             self.i = i;
             self.d = d;
             self.yd_old = yd;
@@ -1309,9 +1310,10 @@ mod tests {
     /// A sample of the property tests: mostly sane readings, now and then a spike, a NaN or an
     /// infinity.
     fn reading() -> impl proptest::strategy::Strategy<Value = f64> {
-        use proptest::prelude::prop_oneof;
+        use proptest::prelude::{Just, prop_oneof};
         prop_oneof![
             8 => -100.0f64..100.0,
+            1 => Just(0.0),
             1 => proptest::sample::select(vec![1e4, -1e4, 1e9, -1e9, 1e30, -1e30, 3e38, -3e38, 1e300]),
             1 => proptest::sample::select(vec![f64::NAN, f64::INFINITY, f64::NEG_INFINITY]),
         ]
@@ -1339,10 +1341,22 @@ mod tests {
                 -50.0f64..0.0,
                 0.0f64..50.0,
                 prop::option::of(prop_oneof![Just(0.0), 0.01f64..10.0]),
+                0u8..8,
             ),
         )
             .prop_map(
-                |((kind, reverse, k, ti, td, n), (b, c, tt_samples, h), (ymin, ymax, dymax))| {
+                |(
+                    (kind, reverse, k, ti, td, n),
+                    (b, c, tt_samples, h),
+                    (ymin, ymax, dymax, shape),
+                )| {
+                    // Now and then limits that leave one output value (0 or another): a scale
+                    // of 0 (bounds of 0) or a span of 0.
+                    let (ymin, ymax) = match shape {
+                        0 => (0.0, 0.0),
+                        1 => (ymax, ymax),
+                        _ => (ymin, ymax),
+                    };
                     Config {
                         kind,
                         action: if reverse {
@@ -1416,29 +1430,15 @@ mod tests {
             config in any_config(),
             samples in prop::collection::vec((0u8..9, reading(), reading(), reading()), 1..120),
         )| {
-            let mut single = Pid::<f32>::new(&config).unwrap();
-            let mut double = Pid::<f64>::new(&config).unwrap();
+            // Degenerate limits (ymin = ymax = 0) make some rate limits unrepresentable.
+            let (Ok(mut single), Ok(mut double)) = (Pid::<f32>::new(&config), Pid::<f64>::new(&config))
+            else {
+                return Ok(());
+            };
             for &(event, r, y, extra) in &samples {
                 fast_equals_general(&mut single, event, r, y, extra);
                 fast_equals_general(&mut double, event, r, y, extra);
             }
         });
-    }
-
-    #[test]
-    fn neg_and_abs_are_exact_for_floats_and_saturate_for_fixed() {
-        for x in [0.0f32, -0.0, 1.5, -2.5, f32::MAX, f32::MIN, f32::INFINITY] {
-            assert_eq!(Scalar::neg(x).to_bits(), (-x).to_bits());
-            assert_eq!(Scalar::abs(x).to_bits(), x.abs().to_bits());
-        }
-        assert!(Scalar::abs(f64::NAN).is_nan());
-        #[cfg(feature = "fixed")]
-        {
-            use fixed::types::I16F16;
-            assert_eq!(Scalar::neg(I16F16::MIN), I16F16::MAX);
-            assert_eq!(Scalar::abs(I16F16::MIN), I16F16::MAX);
-            assert_eq!(Scalar::abs(I16F16::from_num(-3)), I16F16::from_num(3));
-            assert_eq!(Scalar::neg(I16F16::from_num(2)), I16F16::from_num(-2));
-        }
     }
 }

@@ -367,6 +367,23 @@ mod tests {
         assert!(!Scalar::is_finite(f32::NAN));
     }
 
+    #[test]
+    fn neg_and_abs_are_exact_for_floats_and_saturate_for_fixed() {
+        for x in [0.0f32, -0.0, 1.5, -2.5, f32::MAX, f32::MIN, f32::INFINITY] {
+            assert_eq!(Scalar::neg(x).to_bits(), (-x).to_bits());
+            assert_eq!(Scalar::abs(x).to_bits(), x.abs().to_bits());
+        }
+        assert!(Scalar::abs(f64::NAN).is_nan());
+        #[cfg(feature = "fixed")]
+        {
+            use fixed::types::I16F16;
+            assert_eq!(Scalar::neg(I16F16::MIN), I16F16::MAX);
+            assert_eq!(Scalar::abs(I16F16::MIN), I16F16::MAX);
+            assert_eq!(Scalar::abs(I16F16::from_num(-3)), I16F16::from_num(3));
+            assert_eq!(Scalar::neg(I16F16::from_num(2)), I16F16::from_num(-2));
+        }
+    }
+
     #[cfg(feature = "fixed")]
     #[test]
     fn fixed_saturates_and_never_panics() {
