@@ -186,13 +186,18 @@ pub struct Pid<T> {
     i_mid: T,
     /// The half-width of the integral's bounds: (ymax − ymin)/2 + [`STATE_BOUND`] scales.
     i_half: T,
-    /// [`STATE_BOUND`] scales: the derivative term's bound either way.
+    /// [`STATE_BOUND`] scales: the derivative term's bound either way (read it with
+    /// [`derivative_bound`](Pid::derivative_bound)). For floats its sign also admits the fast
+    /// path of [`step`](Pid::step): negative while the controller is started and automatic,
+    /// positive otherwise (see [`set_flags`](Pid::set_flags)), so that one compare there stands
+    /// for the mode test and both state bounds.
     d_bound: T,
     i: T,
     d: T,
     r_old: T,
-    /// y − c·r of the last sample: the derivative's input (and with `r_old` the last
-    /// measurement, for a bumpless change).
+    /// The derivative's input of the last sample as [`derivative_input`](Pid::derivative_input)
+    /// stores it: y − c·r, for floats c·r − y (with `r_old` also the last measurement, for a
+    /// bumpless change).
     yd_old: T,
     u_old: T,
     /// [`STARTED`] and [`MANUAL`] in one byte, so that the common case (automatic and
@@ -355,6 +360,15 @@ fn hold<T: Scalar, F: Real>(
             exact,
         })
     }
+}
+
+/// `x` limited to `lo..=hi` (ordered), as [`Scalar::clamp_within`], except that a NaN becomes
+/// a limit: for floats one `max` and one `min` that may read the limits from memory (a clamp
+/// that keeps NaN needs them in registers). For values whose NaN is caught elsewhere.
+#[inline(always)]
+fn limit<T: PartialOrd>(x: T, lo: T, hi: T) -> T {
+    let above = if x > lo { x } else { lo };
+    if above < hi { above } else { hi }
 }
 
 /// How close to the end of `T`'s range a term may reach before a [`Station`](crate::Station)
@@ -530,6 +544,28 @@ impl<T: Scalar> Pid<T> {
         self.i_half = k.i_half;
         self.d_bound = k.d_bound;
         self.fast_gate = T::raw_gate(self);
+        self.set_flags(self.flags);
+    }
+
+    /// Sets the mode flags ([`STARTED`], [`MANUAL`]) and, for floats, the fast path's
+    /// admission (the sign of `d_bound`) with them.
+    #[inline(always)]
+    fn set_flags(&mut self, flags: u8) {
+        self.flags = flags;
+        if !T::SATURATES {
+            let bound = self.d_bound.abs();
+            self.d_bound = if flags == STARTED { bound.neg() } else { bound };
+        }
+    }
+
+    /// The derivative term's bound, [`STATE_BOUND`] output scales.
+    #[inline(always)]
+    fn derivative_bound(&self) -> T {
+        if T::SATURATES {
+            self.d_bound
+        } else {
+            self.d_bound.abs()
+        }
     }
 
     /// One sample: the output for set-point `r` and measurement `y`.
@@ -580,7 +616,12 @@ impl<T: Scalar> Pid<T> {
             }
             return self.step_general::<FEEDFORWARD>(r, y, feedforward, track);
         }
-        if self.flags == STARTED {
+        if !T::SATURATES {
+            // Floats: see `step_float`.
+            if let Some(u) = self.step_float::<FEEDFORWARD>(r, y, feedforward, track) {
+                return u;
+            }
+        } else if self.flags == STARTED {
             let s = self.compute::<FEEDFORWARD>(r, y, feedforward, track, self.yd_old, false);
             // One test accepts the sample: the new integral lies inside its bounds, which move
             // with the set-point. It also proves every value finite: a NaN or infinite r or y
@@ -594,6 +635,69 @@ impl<T: Scalar> Pid<T> {
             }
         }
         self.step_general::<FEEDFORWARD>(r, y, feedforward, track)
+    }
+
+    /// The fast path for floats: the sample of [`compute`](Pid::compute), stored and its output
+    /// returned if it is admitted, or `None` (nothing stored) for
+    /// [`step_general`](Pid::step_general) to compute again.
+    ///
+    /// One compare admits it: −(|centre − I| + |D|) > `d_bound`, where `d_bound` is
+    /// −[`STATE_BOUND`] scales while started and automatic and +[`STATE_BOUND`] scales
+    /// otherwise (nothing passes, not even 0 when the scale is 0: the compare is strict). That
+    /// is the mode test, the derivative's bound (here, D is not clamped: an admitted D needs no
+    /// clamp) and the integral's (the bound on |D| is the smaller of the two, and a rounded sum
+    /// of magnitudes is never below either), and it proves every value finite as the test of
+    /// `step` does: a NaN or infinite r or y makes P non-finite (0·∞ is NaN), and a non-finite
+    /// v reaches I through ao·(u − v). Only states far outside any working loop's
+    /// (|I − centre| + |D| at or beyond 100 output scales) take the general path that the
+    /// separate bounds would have let through; it gives them the same result.
+    ///
+    /// The output limits drop a NaN (one `maxss`/`minss` each on x86, with the limit read from
+    /// memory): a NaN v is caught through I all the same. I is computed as
+    /// I − (bi·(y − r) + ao·(v − u)), the same number as the reference's I + bi·(r − y) +
+    /// ao·(u − v) (a negation is exact in every rounding step), so that neither y nor v needs
+    /// a copy on two-operand machines.
+    #[inline(always)]
+    fn step_float<const FEEDFORWARD: bool>(
+        &mut self,
+        r: T,
+        y: T,
+        feedforward: T,
+        track: Option<T>,
+    ) -> Option<T> {
+        let p = self.kp.mul(self.b.mul(r).sub(y));
+        let yd = self.derivative_input(r, y);
+        // The change of y − c·r: yd, yd_old are its negations (see `derivative_input`).
+        let d = self
+            .ad
+            .mul(self.d)
+            .sub(self.bd.mul(self.yd_old.sub(yd)))
+            .flush_tiny();
+        let mut v = p.add(self.i).add(d);
+        if FEEDFORWARD {
+            v = v.add(feedforward);
+        }
+        let u = limit(
+            v.clamp_within(self.u_old.sub(self.dymax), self.u_old.add(self.dymax)),
+            self.ymin,
+            self.ymax,
+        );
+        let applied = track.unwrap_or(u);
+        let i = self
+            .i
+            .sub(self.bi.mul(y.sub(r)).add(self.ao.mul(v.sub(applied))));
+        let centre = self.integral_centre(r, self.bounds_feedforward::<FEEDFORWARD>(feedforward));
+        let reach = centre.sub(i).abs().neg().sub(d.abs());
+        if reach > self.d_bound {
+            self.i = i;
+            self.d = d;
+            self.yd_old = yd;
+            self.r_old = r;
+            self.u_old = applied;
+            Some(u)
+        } else {
+            None
+        }
     }
 
     /// Every sample the fast path of [`step`](Pid::step) does not take: the first one (its
@@ -612,15 +716,24 @@ impl<T: Scalar> Pid<T> {
         let yd_old = if self.started() {
             self.yd_old
         } else {
-            y.sub(self.c.mul(r))
+            self.derivative_input(r, y)
         };
         let manual = self.flags & MANUAL != 0;
         let mut s = self.compute::<FEEDFORWARD>(r, y, feedforward, track, yd_old, manual);
         let centre = self.integral_centre(r, self.bounds_feedforward::<FEEDFORWARD>(feedforward));
-        let bounded = centre.add(
-            s.i.sub(centre)
-                .clamp_within(T::ZERO.sub(self.i_half), self.i_half),
-        );
+        // Inside its bounds, a float I is kept as computed (as the fast path keeps it; centre +
+        // (I − centre) could be an ulp off). Fixed point takes the clamp always: there it is
+        // exact inside the bounds, and centre − I may saturate, which with i_half = MAX would
+        // read as inside for an I beyond the bounds (`raw.rs`,
+        // `an_integral_beyond_bounds_that_span_the_type_is_bounded`).
+        let bounded = if !T::SATURATES && centre.sub(s.i).magnitude_within(self.i_half) {
+            s.i
+        } else {
+            centre.add(
+                s.i.sub(centre)
+                    .clamp_within(T::ZERO.sub(self.i_half), self.i_half),
+            )
+        };
         // A finite I implies finite inputs and v (see `step`; in manual I = u − P − D); the
         // bounds themselves may overflow when an absurd set-point moves them.
         if s.saturated || !T::both_finite(s.i, bounded) {
@@ -629,7 +742,7 @@ impl<T: Scalar> Pid<T> {
         }
         s.i = bounded;
         // The fast path runs only once started, so only this path marks it.
-        self.flags |= STARTED;
+        self.set_flags(self.flags | STARTED);
         self.commit(s, r, track)
     }
 
@@ -652,16 +765,24 @@ impl<T: Scalar> Pid<T> {
         let p = self
             .kp
             .mul_noting(self.b.mul_noting(r, &mut o).sub_noting(y, &mut o), &mut o);
-        let yd = y.sub_noting(self.c.mul_noting(r, &mut o), &mut o);
+        let cr = self.c.mul_noting(r, &mut o);
+        // The derivative's input as stored, and its change y − c·r − (y_old − c·r_old).
+        let (yd, change) = if T::SATURATES {
+            let yd = y.sub_noting(cr, &mut o);
+            (yd, yd.sub_noting(yd_old, &mut o))
+        } else {
+            let yd = cr.sub(y);
+            (yd, yd_old.sub(yd))
+        };
         let d = self
             .ad
             .mul_noting(self.d, &mut o)
-            .sub_noting(
-                self.bd.mul_noting(yd.sub_noting(yd_old, &mut o), &mut o),
-                &mut o,
-            )
+            .sub_noting(self.bd.mul_noting(change, &mut o), &mut o)
             .flush_tiny()
-            .clamp_within(T::ZERO.sub(self.d_bound), self.d_bound);
+            .clamp_within(
+                T::ZERO.sub(self.derivative_bound()),
+                self.derivative_bound(),
+            );
         if manual {
             let u = self.u_old;
             return Sample {
@@ -784,7 +905,7 @@ impl<T: Scalar> Pid<T> {
             let p_after = self.proportional(self.r_old, y_old);
             i = i.add(p_before).sub(p_after);
             // The derivative's input under the new weight c: steady readings stay steady.
-            self.yd_old = y_old.sub(self.c.mul(self.r_old));
+            self.yd_old = self.derivative_input(self.r_old, y_old);
         }
         if !config.kind.has_d() {
             if config.kind.has_i() {
@@ -805,7 +926,22 @@ impl<T: Scalar> Pid<T> {
     /// The last sample's measurement, from the derivative's input y − c·r (exact where c·r is,
     /// always for c = 0; within rounding otherwise).
     fn last_measurement(&self) -> T {
-        self.yd_old.add(self.c.mul(self.r_old))
+        let cr = self.c.mul(self.r_old);
+        if T::SATURATES {
+            self.yd_old.add(cr)
+        } else {
+            cr.sub(self.yd_old)
+        }
+    }
+
+    /// The derivative's input y − c·r as `yd_old` stores it. Floats store its negation c·r − y
+    /// (the same number with the sign flipped: negation is exact), which a two-operand machine
+    /// computes without a copy of y; fixed point stores y − c·r (a saturated negation would
+    /// not be exact).
+    #[inline(always)]
+    fn derivative_input(&self, r: T, y: T) -> T {
+        let cr = self.c.mul(r);
+        if T::SATURATES { y.sub(cr) } else { cr.sub(y) }
     }
 
     fn proportional(&self, r: T, y: T) -> T {
@@ -818,7 +954,7 @@ impl<T: Scalar> Pid<T> {
             return Err(ValueError::NotFinite);
         }
         self.u_old = u.clamp_within(self.ymin, self.ymax);
-        self.flags |= MANUAL;
+        self.set_flags(self.flags | MANUAL);
         Ok(())
     }
 
@@ -829,7 +965,7 @@ impl<T: Scalar> Pid<T> {
             let p = self.proportional(self.r_old, self.last_measurement());
             self.i = self.bounded_integral(self.u_old.sub(p).sub(self.d));
         }
-        self.flags &= !MANUAL;
+        self.set_flags(self.flags & !MANUAL);
     }
 
     /// Auto or manual.
@@ -877,7 +1013,7 @@ impl<T: Scalar> Pid<T> {
         self.d = T::ZERO;
         self.yd_old = T::ZERO;
         self.r_old = T::ZERO;
-        self.flags = 0;
+        self.set_flags(0);
         self.faults = Faults::default();
         self.u_old = T::ZERO.clamp_within(self.ymin, self.ymax);
     }
@@ -1188,5 +1324,140 @@ mod tests {
             "rate-limited from 0"
         );
         assert!(!s.faults().any());
+    }
+
+    /// A sample of the property tests: mostly sane readings, now and then a spike, a NaN or an
+    /// infinity.
+    fn reading() -> impl proptest::strategy::Strategy<Value = f64> {
+        use proptest::prelude::{Just, prop_oneof};
+        prop_oneof![
+            8 => -100.0f64..100.0,
+            1 => Just(0.0),
+            1 => proptest::sample::select(vec![1e4, -1e4, 1e9, -1e9, 1e30, -1e30, 3e38, -3e38, 1e300]),
+            1 => proptest::sample::select(vec![f64::NAN, f64::INFINITY, f64::NEG_INFINITY]),
+        ]
+    }
+
+    fn any_config() -> impl proptest::strategy::Strategy<Value = Config> {
+        use proptest::prelude::{Just, prop, prop_oneof};
+        use proptest::strategy::Strategy;
+        (
+            (
+                prop::sample::select(Kind::ALL.to_vec()),
+                proptest::bool::ANY,
+                0.01f64..20.0,
+                0.1f64..100.0,
+                0.0f64..20.0,
+                1.0f64..20.0,
+            ),
+            (
+                0.0f64..1.0,
+                0.0f64..1.0,
+                prop::option::of(0.51f64..50.0),
+                0.01f64..5.0,
+            ),
+            (
+                -50.0f64..0.0,
+                0.0f64..50.0,
+                prop::option::of(prop_oneof![Just(0.0), 0.01f64..10.0]),
+                0u8..8,
+            ),
+        )
+            .prop_map(
+                |(
+                    (kind, reverse, k, ti, td, n),
+                    (b, c, tt_samples, h),
+                    (ymin, ymax, dymax, shape),
+                )| {
+                    // Now and then limits that leave one output value (0 or another): a scale
+                    // of 0 (bounds of 0) or a span of 0.
+                    let (ymin, ymax) = match shape {
+                        0 => (0.0, 0.0),
+                        1 => (ymax, ymax),
+                        _ => (ymin, ymax),
+                    };
+                    Config {
+                        kind,
+                        action: if reverse {
+                            Action::Reverse
+                        } else {
+                            Action::Direct
+                        },
+                        k,
+                        ti,
+                        td,
+                        n,
+                        b,
+                        c,
+                        tt: tt_samples.map(|m| m * h),
+                        h,
+                        ymin,
+                        ymax,
+                        dymax,
+                    }
+                },
+            )
+    }
+
+    /// One sample through `update` (or `update_with`) and the same sample through the general
+    /// path on a copy: the same output and the same state, flags and faults. `event` 0..=5 is
+    /// a plain sample, 6 one with feed-forward and tracking, 7 a switch to manual, 8 back to
+    /// automatic.
+    fn fast_equals_general<T: Scalar>(pid: &mut Pid<T>, event: u8, r: f64, y: f64, extra: f64) {
+        let (rt, yt, xt) = (T::from_f64(r), T::from_f64(y), T::from_f64(extra));
+        match event {
+            7 => {
+                let _ = pid.set_manual(xt);
+                return;
+            }
+            8 => {
+                pid.set_auto();
+                return;
+            }
+            _ => {}
+        }
+        let mut general = pid.clone();
+        let (fast, slow) = if event == 6 && extra.is_finite() {
+            let inputs = Inputs {
+                feedforward: xt,
+                track: (r > 0.0).then_some(xt),
+            };
+            (
+                pid.update_with(rt, yt, inputs),
+                general.step_general::<true>(rt, yt, inputs.feedforward, inputs.track),
+            )
+        } else {
+            (
+                pid.update(rt, yt),
+                general.step_general::<false>(rt, yt, T::ZERO, None),
+            )
+        };
+        assert_eq!(fast, slow, "output for r = {r:e}, y = {y:e}");
+        assert_eq!(*pid, general, "state after r = {r:e}, y = {y:e}");
+    }
+
+    /// The fast path of `update` is a shortcut, never another algorithm: for any configuration,
+    /// any sequence of readings (spikes, NaN and infinities among them) and mode switches, it
+    /// gives the output and leaves the state that the general path gives for the same sample, in
+    /// `f32` and `f64`. It fails if the fast path admits a sample the general path would bound
+    /// (an integral or derivative state beyond `STATE_BOUND`, a non-finite value), mis-signs a
+    /// term, or runs in manual mode or on the first sample.
+    #[test]
+    fn the_fast_path_is_the_general_path() {
+        use proptest::prelude::{ProptestConfig, prop, proptest};
+        proptest!(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 500 }), |(
+            config in any_config(),
+            samples in prop::collection::vec((0u8..9, reading(), reading(), reading()), 1..120),
+        )| {
+            // Degenerate limits (ymin = ymax = 0) make some rate limits unrepresentable.
+            let (Ok(mut single), Ok(mut double)) = (Pid::<f32>::new(&config), Pid::<f64>::new(&config))
+            else {
+                return Ok(());
+            };
+            for &(event, r, y, extra) in &samples {
+                fast_equals_general(&mut single, event, r, y, extra);
+                fast_equals_general(&mut double, event, r, y, extra);
+            }
+        });
     }
 }

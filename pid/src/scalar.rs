@@ -80,6 +80,20 @@ pub trait Scalar: Copy + PartialOrd + core::fmt::Debug {
         let _ = saturated;
         self.mul(rhs)
     }
+    /// −`self` (saturating for fixed point: −`MIN` is `MAX`). Exact for floats, whose sign
+    /// bit it flips (−0 for 0, unlike `ZERO − self`).
+    #[inline(always)]
+    #[must_use]
+    fn neg(self) -> Self {
+        Self::ZERO.sub(self)
+    }
+    /// |`self`| (saturating for fixed point: |`MIN`| is `MAX`). Exact for floats; NaN stays
+    /// NaN.
+    #[inline(always)]
+    #[must_use]
+    fn abs(self) -> Self {
+        if self < Self::ZERO { self.neg() } else { self }
+    }
     /// Whether the value is a finite number (always true for fixed point).
     fn is_finite(self) -> bool;
     /// Whether both values are finite (one test where the type allows it).
@@ -168,6 +182,14 @@ macro_rules! float_ops {
         #[inline(always)]
         fn mul(self, rhs: $t) -> $t {
             self * rhs
+        }
+        #[inline(always)]
+        fn neg(self) -> $t {
+            -self
+        }
+        #[inline(always)]
+        fn abs(self) -> $t {
+            <$t>::abs(self)
         }
         #[inline(always)]
         fn is_finite(self) -> bool {
@@ -399,6 +421,23 @@ mod tests {
         assert_eq!(<f32 as Scalar>::from_real(f32::INFINITY), f32::INFINITY);
         assert_eq!(Scalar::mul(3.0f64, 2.0), 6.0);
         assert!(!Scalar::is_finite(f32::NAN));
+    }
+
+    #[test]
+    fn neg_and_abs_are_exact_for_floats_and_saturate_for_fixed() {
+        for x in [0.0f32, -0.0, 1.5, -2.5, f32::MAX, f32::MIN, f32::INFINITY] {
+            assert_eq!(Scalar::neg(x).to_bits(), (-x).to_bits());
+            assert_eq!(Scalar::abs(x).to_bits(), x.abs().to_bits());
+        }
+        assert!(Scalar::abs(f64::NAN).is_nan());
+        #[cfg(feature = "fixed")]
+        {
+            use fixed::types::I16F16;
+            assert_eq!(Scalar::neg(I16F16::MIN), I16F16::MAX);
+            assert_eq!(Scalar::abs(I16F16::MIN), I16F16::MAX);
+            assert_eq!(Scalar::abs(I16F16::from_num(-3)), I16F16::from_num(3));
+            assert_eq!(Scalar::neg(I16F16::from_num(2)), I16F16::from_num(-2));
+        }
     }
 
     #[cfg(feature = "fixed")]
