@@ -1100,3 +1100,82 @@ fn station_samples_at_the_extremes() {
         assert!(f.pid().faults().non_finite_input());
     }
 }
+
+/// Key codes over every `u8` (exhaustive): exactly the twelve codes of the source are codes;
+/// `Kind::parse` of empty, blank, padded, mixed-case and unknown text.
+#[test]
+fn codes_and_kinds_over_every_input() {
+    let known = [10u8, 21, 31, 41, 51, 61, 71, 81, 82, 83, 91, 95];
+    for n in 0..=u8::MAX {
+        let code = Code::from_number(n);
+        assert_eq!(code.is_some(), known.contains(&n), "code {n}");
+        if let Some(c) = code {
+            assert_eq!(c.number(), n);
+        }
+    }
+    // (text, kind)
+    let rows: [(&str, Option<Kind>); 8] = [
+        ("", None),
+        ("   ", None),
+        ("pid", Some(Kind::PID)),
+        (" Pi\t", Some(Kind::PI)),
+        ("PIDD", None),
+        ("P I", None),
+        ("\u{0}", None),
+        ("ΡΙ", None), // Greek capitals that look like PI
+    ];
+    for (text, kind) in rows {
+        assert_eq!(Kind::parse(text), kind, "{text:?}");
+    }
+}
+
+/// A fixed-point `Station` refuses a scale its type cannot hold, naming it; the same scale is
+/// accepted in `f32` and `f64`.
+#[test]
+fn station_scales_at_the_extremes() {
+    let limits = OperatorLimits::default();
+    // A P controller of small gain, so that the reach check (pid-12) does not refuse first.
+    let params = |setpoint| {
+        let mut p = Parameters {
+            setpoint,
+            ..station_params()
+        };
+        p.config.kind = Kind::P;
+        p.config.k = 0.05;
+        p
+    };
+    // (min, max, I16F16 accepts, I32F32 accepts)
+    let rows: [(f64, f64, bool, bool); 5] = [
+        (0.0, 40.0, true, true),
+        (0.0, 30_000.0, true, true),
+        (0.0, 40_000.0, false, true),
+        (-1e9, 1e9, false, true),
+        (0.0, 1e12, false, false),
+    ];
+    for (lo, hi, i16f16, i32f32) in rows {
+        let scale = Scaling::new(lo, hi).unwrap();
+        let p = params(lo.max(0.0).min(hi));
+        let shape = |r: Result<(), EditError>| match r {
+            Ok(()) => true,
+            Err(EditError::ScaleUnrepresentable { min, max, .. }) => {
+                assert_eq!((min, max), (lo, hi));
+                false
+            }
+            Err(e) => panic!("scale {lo}..{hi}: {e:?}"),
+        };
+        assert_eq!(
+            shape(Station::<I16F16>::new(p, scale, limits).map(|_| ())),
+            i16f16,
+            "I16F16 {lo}..{hi}"
+        );
+        assert_eq!(
+            shape(Station::<I32F32>::new(p, scale, limits).map(|_| ())),
+            i32f32,
+            "I32F32 {lo}..{hi}"
+        );
+        assert!(
+            Station::<f64>::new(p, scale, limits).is_ok(),
+            "f64 {lo}..{hi}"
+        );
+    }
+}
