@@ -756,3 +756,71 @@ fn every_reachable_timer_state_is_restored() {
     }
     assert_eq!(seen, 9 * 11_111);
 }
+
+/// Stored images and forcing with too few and too many words, and words at `u16::MAX`: the
+/// exact count or an error, never a padded or cut image.
+#[cfg(feature = "serde")]
+#[test]
+fn stored_images_at_the_extremes() {
+    // (stored words, Image<2> restored?)
+    let rows: [(&str, bool); 5] = [
+        ("[]", false),
+        ("[65535]", false),
+        ("[65535,65535]", true),
+        ("[0,0,0]", false),
+        ("[65536,0]", false),
+    ];
+    for (words, ok) in rows {
+        let image = serde_json::from_str::<Image<2>>(&format!("{{\"words\":{words}}}"));
+        assert_eq!(image.is_ok(), ok, "Image<2> from {words}: {image:?}");
+        if let Ok(image) = image {
+            assert_eq!(image.words(), &[u16::MAX; 2]);
+            assert_eq!(image.ones().count(), 32);
+        }
+    }
+    let f = Forcing::<1>::new();
+    let text = serde_json::to_string(&f).unwrap();
+    assert_eq!(serde_json::from_str::<Forcing<1>>(&text).unwrap(), f);
+    assert!(
+        serde_json::from_str::<Forcing<2>>(&text).is_err(),
+        "a one-word forcing is not a two-word one"
+    );
+}
+
+/// Power failure and resume at the extremes: a power failure before any cycle, twice in a row,
+/// a resume without one; the safe outputs are written and no cycle runs while it lasts.
+#[test]
+fn power_failures_at_the_extremes() {
+    let safe = Image::<1>::from_words([0x0F0F]);
+    let config = CycleConfig {
+        safe_outputs: safe,
+        ..CycleConfig::source()
+    };
+    let mut plc: Executive<1, 1> = Executive::new(config);
+    let mut io = Clock {
+        t: 0,
+        step: 0,
+        out: [0xFFFF],
+    };
+    plc.resume(regler_scan_cycle::Restart::Inhibit); // no power failure: nothing happens
+    assert_eq!(plc.halted(), None);
+    plc.power_fail(&mut io);
+    plc.power_fail(&mut io);
+    assert_eq!((io.out, plc.halted()), ([0x0F0F], Some(Halt::PowerFail)));
+    assert_eq!(
+        plc.cycle(&mut io, |_| panic!("no cycle while the power is off")),
+        Err(Halt::PowerFail)
+    );
+    assert_eq!(plc.cycle_count(), 0);
+    plc.resume(regler_scan_cycle::Restart::Inhibit);
+    let mut previous = None;
+    io.t = 1000;
+    plc.cycle(&mut io, |s| previous = Some(*s.previous))
+        .unwrap();
+    assert_eq!(
+        previous,
+        Some(safe),
+        "Restart::Inhibit starts from the safe outputs"
+    );
+    assert_eq!(plc.cycle_count(), 1);
+}
