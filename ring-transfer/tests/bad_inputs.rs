@@ -526,3 +526,45 @@ proptest::proptest! {
         proptest::prop_assert_eq!(m.on_report(1, 0, &r), Ok(ReportOutcome::Accepted { owed }));
     }
 }
+
+fn refill_frame(first: u16, items: &[u8], sync: bool) -> Vec<u8> {
+    let mut out = [0u8; MAX_FRAME];
+    let n = Refill {
+        slave: 1,
+        first,
+        items,
+        boot: 0,
+        sync,
+    }
+    .encode(&mut out)
+    .unwrap();
+    out[..n].to_vec()
+}
+
+/// A slave placed just below the 16-bit wrap takes items across it in order: a duplicate
+/// (behind the next index, across the wrap) is dropped, a gap (ahead of it) is dropped and asks
+/// for a resend; its report's counters wrap.
+#[test]
+#[rustfmt::skip]
+fn a_slave_across_the_counters_wrap() {
+    let mut s: Slave<8> = Slave::new(config()).unwrap();
+    // (what, frame, items taken, (consumed, received) reported)
+    let rows: Vec<(&str, Vec<u8>, usize, (u16, u16))> = vec![
+        ("sync at 65 534, four items", refill_frame(65_534, &[1, 2, 3, 4], true), 4, (65_534, 2)),
+        ("the same again: duplicates", refill_frame(65_534, &[1, 2, 3, 4], false), 0, (65_534, 2)),
+        ("behind across the wrap: duplicates", refill_frame(65_535, &[2, 3], false), 0, (65_534, 2)),
+        ("ahead: a gap", refill_frame(4, &[7], false), 0, (65_534, 2)),
+        ("next in order", refill_frame(2, &[5, 6], false), 2, (65_534, 4)),
+        ("a keep-alive", refill_frame(0, &[], false), 0, (65_534, 4)),
+    ];
+    for (what, frame, taken, (consumed, received)) in rows {
+        assert_eq!(s.on_frame(&frame), Ok(taken), "{what}");
+        let r = s.report(false);
+        assert_eq!((r.consumed, r.received), (consumed, received), "{what}");
+    }
+    assert_eq!((s.stats().duplicates, s.stats().gaps), (6, 1));
+    // The items come out in stream order across the wrap.
+    let out: Vec<u8> = (0..6).map(|_| s.step(|_, _| 0xEE).item).collect();
+    assert_eq!(out, [1, 2, 3, 4, 5, 6]);
+    assert_eq!(s.report(false).consumed, 4, "consumed wrapped past 65 535");
+}
