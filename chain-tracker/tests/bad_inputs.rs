@@ -333,3 +333,43 @@ fn stretch_meter_at_the_extremes() {
     m.reconcile(M).unwrap();
     assert_eq!((m.stretch_per_mille(), m.alarm()), (0, false));
 }
+
+/// `start_up` with every combination of a good, a corrupt and no snapshot and a good, an
+/// unusable (its DIA overflows the table) and no meter, and a refused meter configuration.
+#[test]
+#[rustfmt::skip]
+fn start_up_at_the_extremes() {
+    use regler_chain_tracker::{StartUp, start_up};
+    let fresh = || tracker::<2>(&[100, 2000], 6);
+    let mut running = fresh();
+    running.recalibrate(990).unwrap();
+    running.enter(1, 1).unwrap();
+    let good = running.snapshot();
+    let mut corrupt = good.clone();
+    corrupt.in_flight[0].remaining = 0;
+    let c = StretchConfig::new(1000);
+    let meter = |dia| StretchMeter::with_dia(c, dia).unwrap();
+    // (what, snapshot, meter, result: what was usable, the table's DIA after, trolleys on the chain)
+    let rows: Vec<(&str, Option<&Snapshot<u16, 2, 2>>, Option<StretchMeter>, Result<(StartUp, u32, usize), StretchConfigError>)> = vec![
+        ("both", Some(&good), Some(meter(990)), Ok((StartUp::Both, 990, 1))),
+        ("both, meter stale", Some(&good), Some(meter(995)), Ok((StartUp::Both, 990, 1))),
+        ("corrupt snapshot, meter", Some(&corrupt), Some(meter(995)), Ok((StartUp::MeterOnly, 995, 0))),
+        ("no snapshot, meter", None, Some(meter(995)), Ok((StartUp::MeterOnly, 995, 0))),
+        ("no snapshot, meter's DIA overflows the table", None, Some(meter(M)), Ok((StartUp::Neither, 1000, 0))),
+        ("snapshot only", Some(&good), None, Ok((StartUp::SnapshotOnly, 990, 1))),
+        ("corrupt snapshot only", Some(&corrupt), None, Ok((StartUp::Neither, 1000, 0))),
+        ("nothing", None, None, Ok((StartUp::Neither, 1000, 0))),
+    ];
+    for (what, snapshot, stored, want) in rows {
+        let mut t = fresh();
+        let got = start_up(&mut t, snapshot, stored, c).map(|(m, how)| {
+            assert_eq!(m.dia(), t.table().dia(), "{what}: meter and table agree");
+            (how, t.table().dia(), t.len())
+        });
+        assert_eq!(got, want, "{what}");
+    }
+    // A meter configuration that is refused, when a new meter must be made.
+    let mut t = fresh();
+    let bad = { let mut b = c; b.confirmations = 0; b };
+    assert_eq!(start_up(&mut t, None, None, bad).map(|_| ()), Err(StretchConfigError::ZeroConfirmations));
+}
