@@ -568,3 +568,35 @@ fn a_slave_across_the_counters_wrap() {
     assert_eq!(out, [1, 2, 3, 4, 5, 6]);
     assert_eq!(s.report(false).consumed, 4, "consumed wrapped past 65 535");
 }
+
+/// `next_refill` with `max` 0 (counts as 1), 1 and `u32::MAX`, at `now` 0 and `u64::MAX`:
+/// never more than is owed, the deadline saturating, a grant at `u64::MAX` late.
+#[test]
+#[rustfmt::skip]
+fn master_grants_at_the_extremes() {
+    let fresh = |t0| {
+        let mut m: Master<1> = Master::new();
+        m.attach(0, SlaveParams { capacity: 8, t0 }).unwrap();
+        m.on_report(0, 0, &report(0, 0)).unwrap();
+        while m.next_refill(0, u32::MAX).is_some() {}
+        m.on_report(10, 0, &report(5, 8)).unwrap(); // five consumed: five owed, three left
+        m
+    };
+    // (what, t0, now, max, (count, deadline, late))
+    let rows: [(&str, u32, u64, u32, (u32, u64, bool)); 5] = [
+        ("max 0 counts as 1", 10, 10, 0, (1, 10 + 3 * 10, false)),
+        ("max 1", 10, 10, 1, (1, 40, false)),
+        ("max MAX: what is owed", 10, 10, u32::MAX, (5, 40, false)),
+        ("now MAX: late", 10, u64::MAX, u32::MAX, (5, 40, true)),
+        ("t0 MAX", u32::MAX, 10, u32::MAX, (5, 10 + 3 * u64::from(u32::MAX), false)),
+    ];
+    for (what, t0, now, max, want) in rows {
+        let mut m = fresh(t0);
+        let g = m.next_refill(now, max).unwrap();
+        assert_eq!((g.count, g.deadline, g.late), want, "{what}");
+        assert_eq!(g.first, 8, "{what}");
+        if want.2 {
+            assert_eq!((m.status(0).unwrap().missed, m.status(0).unwrap().worst_lateness), (1, u64::MAX - 40), "{what}");
+        }
+    }
+}
