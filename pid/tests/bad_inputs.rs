@@ -893,6 +893,11 @@ fn identify_step_at_the_extremes() {
     let flat = vec![1.0f64; 40];
     let mut with_nan = flat.clone();
     with_nan[7] = f64::NAN;
+    // A first-order lag, T = 5 samples, dead time 3 samples; and a jump from 0 to MAX.
+    let lag: Vec<f64> = (0..60)
+        .map(|k| if k < 3 { 0.0 } else { 1.0 - (-(f64::from(k) - 3.0) / 5.0).exp() })
+        .collect();
+    let to_max: Vec<f64> = (0..45).map(|k| if k < 5 { 0.0 } else { f64::MAX }).collect();
     let mut with_inf = flat.clone();
     with_inf[39] = f64::NEG_INFINITY;
     use regler_pid::tuning::IdentifyError as E;
@@ -904,7 +909,12 @@ fn identify_step_at_the_extremes() {
         ("step at usize::MAX", &flat, usize::MAX, 1.0, 1.0, E::StepOutsideLog(usize::MAX, 40)),
         ("h NaN", &flat, 0, f64::NAN, 1.0, E::Input("the sample period")),
         ("h 0", &flat, 0, 0.0, 1.0, E::Input("the sample period")),
+        ("h subnormal", &flat, 0, f64::from_bits(1), 1.0, E::Input("the sample period")),
+        ("h -MIN_POSITIVE", &flat, 0, -f64::MIN_POSITIVE, 1.0, E::Input("the sample period")),
+        ("h MAX: T + L overflows", &lag, 0, f64::MAX, 1.0, E::Overflow("T + L (the sample period times the log)")),
         ("step 0", &flat, 0, 1.0, 0.0, E::Input("the step")),
+        ("step subnormal: change / step overflows", &lag, 0, 1.0, f64::from_bits(1), E::Overflow("the gain (change / step)")),
+        ("samples 0 then MAX: the change overflows", &to_max, 0, 1.0, 1.0, E::Overflow("the change (the samples' mean)")),
         ("step -0", &flat, 0, 1.0, -0.0, E::Input("the step")),
         ("step +inf", &flat, 0, 1.0, f64::INFINITY, E::Input("the step")),
         ("a NaN sample", &with_nan, 0, 1.0, 1.0, E::NotFinite(7)),
@@ -919,6 +929,14 @@ fn identify_step_at_the_extremes() {
         };
         assert_eq!(got, Err(want), "{what}");
     }
+    // The smallest normal sample period and a step of MAX are fitted; T and L scale with h.
+    let tiny = identify_step(&lag, f64::MIN_POSITIVE, 1.0).unwrap();
+    let unit = identify_step(&lag, 1.0, 1.0).unwrap();
+    assert_eq!(tiny.gain, unit.gain);
+    assert!((tiny.time_constant / f64::MIN_POSITIVE / unit.time_constant - 1.0).abs() < 1e-12, "{tiny:?}");
+    let huge_step = identify_step(&lag, 1.0, f64::MAX).unwrap();
+    assert_eq!(huge_step.time_constant, unit.time_constant);
+    assert!(huge_step.gain > 0.0 && huge_step.gain.is_finite());
 }
 
 /// `Relay::new` with each value at its extremes, and `update` with NaN and ∞ measurements
@@ -1177,5 +1195,36 @@ fn station_scales_at_the_extremes() {
             Station::<f64>::new(p, scale, limits).is_ok(),
             "f64 {lo}..{hi}"
         );
+    }
+}
+
+proptest::proptest! {
+    /// Any positive sample period, from the smallest subnormal to MAX (its bits drawn
+    /// uniformly): refused by name when subnormal, an overflow named when T + L does not fit,
+    /// otherwise T and L are the unit fit's times h (to 10⁻⁹), normal numbers. Before the fix a
+    /// subnormal h gave T and L a few ulps long, and a huge one was refused as "not FOPDT".
+    #[test]
+    fn any_sample_period_is_refused_by_name_or_scales_the_fit(bits in 1u64..0x7FF0_0000_0000_0000) {
+        use regler_pid::tuning::IdentifyError as E;
+        let h = f64::from_bits(bits);
+        let lag: Vec<f64> = (0..60)
+            .map(|k| if k < 3 { 0.0 } else { 1.0 - (-(f64::from(k) - 3.0) / 5.0).exp() })
+            .collect();
+        let unit = identify_step(&lag, 1.0, 1.0).unwrap();
+        match identify_step(&lag, h, 1.0) {
+            Err(E::Input("the sample period")) => proptest::prop_assert!(!h.is_normal()),
+            Err(E::Overflow("T + L (the sample period times the log)")) => {
+                // T + L is about 8 h: it overflows only for h within a factor 8 of MAX.
+                proptest::prop_assert!(h > f64::MAX / 16.0, "h {:e}", h);
+            }
+            Ok(fit) => {
+                proptest::prop_assert!(h.is_normal());
+                proptest::prop_assert!((fit.time_constant / h / unit.time_constant - 1.0).abs() < 1e-9, "{:?}", fit);
+                proptest::prop_assert!(fit.time_constant.is_normal());
+                let scale = unit.time_constant + unit.dead_time;
+                proptest::prop_assert!((fit.dead_time / h - unit.dead_time).abs() < 1e-9 * scale, "{:?}", fit);
+            }
+            other => proptest::prop_assert!(false, "h {h:e}: {other:?}"),
+        }
     }
 }
