@@ -278,7 +278,9 @@ fn encode_at_the_extremes() {
 /// wrapping.
 #[test]
 fn newer_boot_over_every_pair() {
-    for candidate in 0..=u8::MAX {
+    // Every pair; under Miri every 7th candidate (the function has no unsafe code to check).
+    let step = if cfg!(miri) { 7 } else { 1 };
+    for candidate in (0..=u8::MAX).step_by(step) {
         for than in 0..=u8::MAX {
             let ahead = candidate.wrapping_sub(than);
             assert_eq!(
