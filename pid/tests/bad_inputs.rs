@@ -18,6 +18,7 @@
     reason = "a test may panic: that is how it fails"
 )]
 
+#[cfg(feature = "fixed")]
 use fixed::types::{I16F16, I32F32};
 use regler_pid::actuator::{ActuatorConfig, ActuatorError, Drive, ThreePoint};
 use regler_pid::tuning::{
@@ -384,6 +385,7 @@ fn float_samples_at_the_extremes() {
     float_sample_table!(f64);
 }
 
+#[cfg(feature = "fixed")]
 #[rustfmt::skip]
 macro_rules! fixed_sample_table {
     ($t:ty) => {{
@@ -445,6 +447,7 @@ macro_rules! fixed_sample_table {
 
 /// Fixed point has no NaN: its extremes are MAX, MIN and the smallest step DELTA. A product or
 /// sum that saturates holds the output with `Faults::overflow` (pid-2).
+#[cfg(feature = "fixed")]
 #[test]
 #[rustfmt::skip]
 fn fixed_samples_at_the_extremes() {
@@ -453,6 +456,7 @@ fn fixed_samples_at_the_extremes() {
 }
 
 /// Fixed-point controllers refuse what their type cannot hold, naming the parameter.
+#[cfg(feature = "fixed")]
 #[test]
 #[rustfmt::skip]
 fn fixed_point_new_at_the_extremes() {
@@ -524,18 +528,17 @@ fn set_manual_at_the_extremes() {
             "reset after set_manual({v})"
         );
     }
-    let mut fixed = Pid::<I16F16>::new(&pi_config()).unwrap();
-    for (v, out) in [
-        (I16F16::MAX, 10.0),
-        (I16F16::MIN, -10.0),
-        (I16F16::DELTA, I16F16::DELTA.to_num()),
-    ] {
-        assert_eq!(fixed.set_manual(v), Ok(()));
-        assert_eq!(
-            fixed.output().to_num::<f64>(),
-            out,
-            "I16F16 set_manual({v})"
-        );
+    #[cfg(feature = "fixed")]
+    {
+        let mut fixed = Pid::<I16F16>::new(&pi_config()).unwrap();
+        for (v, out) in [
+            (I16F16::MAX, 10.0),
+            (I16F16::MIN, -10.0),
+            (I16F16::DELTA, I16F16::DELTA.to_num()),
+        ] {
+            assert_eq!(fixed.set_manual(v), Ok(()));
+            assert_eq!(fixed.output().to_num::<f64>(), out, "I16F16 set_manual({v})");
+        }
     }
 }
 
@@ -1107,15 +1110,18 @@ fn station_samples_at_the_extremes() {
     assert!(!a.pid().faults().any());
     // Fixed point: a measurement beyond the type saturates to its end; the output stays in
     // the limits and is finite.
-    let mut f = Station::<I16F16>::new(station_params(), scale, limits).unwrap();
-    for xin in [f64::MAX, f64::MIN, 1e9, -0.0, f64::from_bits(1)] {
-        let y = f.sample(xin);
-        assert!((0.0..=10.0).contains(&y), "I16F16 xin {xin:e}: {y}");
-    }
-    for xin in [f64::NAN, f64::INFINITY] {
-        let before = f.pid().output().to_num::<f64>();
-        assert_eq!(f.sample(xin), before, "I16F16 xin {xin}");
-        assert!(f.pid().faults().non_finite_input());
+    #[cfg(feature = "fixed")]
+    {
+        let mut f = Station::<I16F16>::new(station_params(), scale, limits).unwrap();
+        for xin in [f64::MAX, f64::MIN, 1e9, -0.0, f64::from_bits(1)] {
+            let y = f.sample(xin);
+            assert!((0.0..=10.0).contains(&y), "I16F16 xin {xin:e}: {y}");
+        }
+        for xin in [f64::NAN, f64::INFINITY] {
+            let before = f.pid().output().to_num::<f64>();
+            assert_eq!(f.sample(xin), before, "I16F16 xin {xin}");
+            assert!(f.pid().faults().non_finite_input());
+        }
     }
 }
 
@@ -1149,6 +1155,7 @@ fn codes_and_kinds_over_every_input() {
 
 /// A fixed-point `Station` refuses a scale its type cannot hold, naming it; the same scale is
 /// accepted in `f32` and `f64`.
+#[cfg(feature = "fixed")]
 #[test]
 fn station_scales_at_the_extremes() {
     let limits = OperatorLimits::default();
