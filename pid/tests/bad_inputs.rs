@@ -967,8 +967,8 @@ fn relay_at_the_extremes() {
         ("timeout = h", RelayConfig { timeout: 0.1, ..base }, Err(RelayError::Config( "timeout must be finite and longer than h", ))),
         ("timeout +inf", RelayConfig { timeout: f64::INFINITY, ..base }, Err(RelayError::Config( "timeout must be finite and longer than h", ))),
         ("timeout MAX, h subnormal", RelayConfig { timeout: f64::MAX, h: f64::from_bits(1), ..base }, Err(RelayError::Config("timeout/h must be at most 2^64 samples"))),
-        ("timeout/h 2^64", RelayConfig { timeout: 2f64.powi(64), h: 1.0, ..base }, Err(RelayError::Config("timeout/h must be at most 2^64 samples"))),
-        ("timeout/h below 2^64", RelayConfig { timeout: 2f64.powi(63), h: 1.0, ..base }, Ok(())),
+        ("timeout/h 2^64", RelayConfig { timeout: 18_446_744_073_709_551_616.0, h: 1.0, ..base }, Err(RelayError::Config("timeout/h must be at most 2^64 samples"))),
+        ("timeout/h below 2^64", RelayConfig { timeout: 9_223_372_036_854_775_808.0, h: 1.0, ..base }, Ok(())),
     ];
     for (what, config, want) in rows {
         assert_eq!(Relay::new(config).map(|_| ()), want, "Relay::new {what}");
