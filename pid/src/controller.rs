@@ -41,6 +41,12 @@ impl Faults {
 
     /// The computation overflowed (a float became infinite, or a fixed-point product or sum
     /// saturated): the output and state were held.
+    ///
+    /// One exception in `f32` and `f64`: the derivative term is bounded to
+    /// [`STATE_BOUND`] output scales before anything else uses it, so a derivative that
+    /// overflows (a measurement jumping by about `MAX`, e.g. from 0 to `f32::MAX`) is that
+    /// bound, exactly as a large finite jump is, and raises no fault; the output goes to its
+    /// limit. In fixed point the saturating product raises this fault and holds the output.
     #[must_use]
     pub const fn overflow(self) -> bool {
         self.0 & Faults::OVERFLOW != 0
@@ -493,7 +499,13 @@ impl<T: Scalar> Pid<T> {
     /// A controller for `config` (in `f64` or `f32`), or the error naming its bad parameter.
     ///
     /// Besides [`Config::validate`], every coefficient and limit must convert into `T` within
-    /// [`TOLERANCE`]; otherwise [`ConfigError::Unrepresentable`] names the parameter.
+    /// [`TOLERANCE`]; otherwise [`ConfigError::Unrepresentable`] names the parameter. A
+    /// coefficient of several parameters is named by the one listed with it, the error's
+    /// `coefficient` giving the whole: `K·h/Ti` by `ti`, `Td/(Td + N·h)` and `K·Td·N/(Td + N·h)`
+    /// by `td` (so `K = f64::MAX` with a derivative term is refused naming `td`), `h/Tt` by `tt`
+    /// (`tt = f64::MAX` vanishes). A subnormal `dymax` is refused (not held within the
+    /// tolerance); limits `f64::MIN..=f64::MAX` are accepted in `f64` (no limits: the states'
+    /// bound, [`STATE_BOUND`] scales, is then infinite).
     pub fn new<F: Real>(config: &Config<F>) -> Result<Pid<T>, ConfigError<F>> {
         let k = Coefficients::<T>::new(config)?;
         // One mapping from coefficients to fields (`apply`, as `set_config` uses it), then the

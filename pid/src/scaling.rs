@@ -205,7 +205,8 @@ impl<F: Real> Scaling<F> {
         Ok(if units > self.max { self.max } else { units })
     }
 
-    /// An engineering value as the nearest A/D count (clamped to 0–4095), for simulators.
+    /// An engineering value as the nearest A/D count (clamped to 0–4095: ±∞ give 4095 and 0),
+    /// for simulators; NaN gives 0.
     #[must_use]
     pub fn units_to_count(&self, units: F) -> u16 {
         nearest_count((units - self.min) / (self.max - self.min), ADC_FULL_SCALE)

@@ -374,7 +374,9 @@ pub fn simc<F: Real>(model: Fopdt<F>, tc: F) -> Result<Tuning<F>, RuleError> {
 pub enum IdentifyError<F = f64> {
     /// Fewer than 20 samples from the step on.
     TooFewSamples(usize),
-    /// The sample period or the step size is not finite and non-zero.
+    /// The sample period is not finite, positive and normal, or the step size not finite and
+    /// non-zero (named). A subnormal sample period (below 2.2·10⁻³⁰⁸ s in `f64`) is refused:
+    /// T and L, multiples of it, would come out a few ulps long, beyond the stated tolerance.
     Input(&'static str),
     /// The step index is not inside the log (the index, the log's length).
     StepOutsideLog(usize, usize),
@@ -406,7 +408,10 @@ impl<F: Real> fmt::Display for IdentifyError<F> {
             Self::TooFewSamples(n) => {
                 write!(f, "{n} samples from the step on: at least 20 are needed")
             }
-            Self::Input(what) => write!(f, "{what} must be finite and non-zero"),
+            Self::Input(what) => write!(
+                f,
+                "{what} is out of range (the sample period must be finite, positive and normal, the step finite and non-zero)"
+            ),
             Self::StepOutsideLog(at, len) => {
                 write!(
                     f,
@@ -563,7 +568,7 @@ pub fn identify_step_at<F: Real>(
     if n < 20 {
         return Err(IdentifyError::TooFewSamples(n));
     }
-    if !(h.is_finite() && h > F::zero()) {
+    if !(h.is_normal() && h > F::zero()) {
         return Err(IdentifyError::Input("the sample period"));
     }
     if !(step.is_finite() && step != F::zero()) {
@@ -649,6 +654,13 @@ pub fn identify_step_at<F: Real>(
     }
     a0.add(-(first + last) * half);
     let t_ar = a0.value() * h; // T + L
+    // Checked before it is used to count samples: an infinite T + L (a huge h) would otherwise
+    // be refused as "not FOPDT".
+    if !t_ar.is_finite() {
+        return Err(IdentifyError::Overflow(
+            "T + L (the sample period times the log)",
+        ));
+    }
     // A1 = ∫₀^(T+L) r dt: whole intervals up to ⌊(T+L)/h⌋, then the partial one interpolated.
     let whole = num_traits::ToPrimitive::to_usize(&(t_ar / h).floor());
     let Some(whole) = whole.filter(|&w| w.saturating_add(1) < n) else {
@@ -1164,6 +1176,30 @@ fn sqrt<F: Real>(x: F) -> F {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_subnormal_or_huge_sample_period_is_named() {
+        let lag: std::vec::Vec<f64> = (0..60)
+            .map(|k| {
+                if k < 3 {
+                    0.0
+                } else {
+                    1.0 - (-(f64::from(k) - 3.0) / 5.0).exp()
+                }
+            })
+            .collect();
+        assert_eq!(
+            identify_step(&lag, f64::from_bits(1), 1.0),
+            Err(IdentifyError::Input("the sample period"))
+        );
+        assert_eq!(
+            identify_step(&lag, f64::MAX, 1.0),
+            Err(IdentifyError::Overflow(
+                "T + L (the sample period times the log)"
+            ))
+        );
+        assert!(identify_step(&lag, f64::MIN_POSITIVE, 1.0).is_ok());
+    }
 
     #[test]
     fn newton_root() {

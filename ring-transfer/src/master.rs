@@ -338,8 +338,10 @@ impl<const S: usize> Master<S> {
             .ok_or(MasterError::NotAttached(slave))
     }
 
-    /// Takes a slave's report received at `now`. The first report after `attach` sets the
-    /// counters; after that a report counts only if it is of the current session's boot number
+    /// Takes a slave's report received at `now`. The first report after `attach` (or
+    /// [`reinit`](Self::reinit)) sets the counters, `received` read as at most half the 16-bit
+    /// range ahead of `consumed` (so a pair straddling the wrap, consumed 65 533 and received 5,
+    /// is 8 items held); after that a report counts only if it is of the current session's boot number
     /// and newer than every one before it, so any pattern of lost, repeated and reordered
     /// reports leaves the master owing exactly what the newest report says. A retry report
     /// makes the master send again from the slave's `received` count (a refill was lost); a
@@ -430,9 +432,14 @@ impl<const S: usize> Master<S> {
         } else {
             link.heard = true;
             status.boot = report.boot;
-            link.first_consumed = u64::from(report.consumed);
-            status.consumed = u64::from(report.consumed);
-            status.received = u64::from(report.received);
+            let consumed = u64::from(report.consumed);
+            link.first_consumed = consumed;
+            status.consumed = consumed;
+            // Received is read next to consumed (a slave holds 0..=N items, N < 2^15, so it is
+            // never behind): read on its own, a pair straddling the wrap (consumed 65 533,
+            // received 5) put received 65 536 behind, and the master owed 65 536 items for good.
+            // A pair no slave sends (received behind consumed) counts as an empty ring.
+            status.received = extend(consumed, report.received).unwrap_or(consumed);
             status.sent = status.received;
         }
         if report.retry {
@@ -544,6 +551,68 @@ impl<const S: usize> Master<S> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_first_report_straddling_the_counters_wrap_owes_only_the_free_slots() {
+        let mut m: Master<1> = Master::new();
+        m.attach(
+            0,
+            SlaveParams {
+                capacity: 8,
+                t0: 10,
+            },
+        )
+        .unwrap();
+        // 8 items held: consumed 65 533, received 65 541 = 5 on the wire.
+        let report = Report {
+            slave: 0,
+            consumed: 65_533,
+            received: 5,
+            standalone: false,
+            retry: false,
+            boot: 0,
+            hello: false,
+        };
+        assert_eq!(
+            m.on_report(0, 0, &report),
+            Ok(ReportOutcome::Accepted { owed: 0 })
+        );
+        assert_eq!(m.next_refill(0, 64), None);
+        // Three consumed (wire 0): three owed, from index 65 541 (wire 5).
+        let report = Report {
+            consumed: 0,
+            ..report
+        };
+        assert_eq!(
+            m.on_report(1, 0, &report),
+            Ok(ReportOutcome::Accepted { owed: 3 })
+        );
+        let grant = m.next_refill(1, 64).unwrap();
+        assert_eq!(
+            (grant.first, grant.first_wire(), grant.count),
+            (65_541, 5, 3)
+        );
+        // A pair no slave sends (received behind consumed) counts as an empty ring.
+        let mut m: Master<1> = Master::new();
+        m.attach(
+            0,
+            SlaveParams {
+                capacity: 8,
+                t0: 10,
+            },
+        )
+        .unwrap();
+        let odd = Report {
+            consumed: 100,
+            received: 90,
+            ..report
+        };
+        assert_eq!(
+            m.on_report(0, 0, &odd),
+            Ok(ReportOutcome::Accepted { owed: 8 })
+        );
+        assert_eq!(m.next_refill(0, 64).map(|g| g.first), Some(100));
+    }
 
     fn report(consumed: u16, received: u16) -> Report {
         Report {

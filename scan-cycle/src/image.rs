@@ -472,7 +472,7 @@ impl<const W: usize> Conditioning<W> {
         Ok(())
     }
 
-    /// The debounce count of `point`.
+    /// The debounce count of `point` (0 for a point outside the image).
     #[must_use]
     pub fn debounce(&self, point: usize) -> u8 {
         (0u8..)

@@ -72,7 +72,8 @@ impl core::error::Error for StrategyError {}
 pub enum NoRead {
     /// No reading had any cam.
     NoCams,
-    /// Fewer readings with cams than the strategy needs.
+    /// Fewer readings with cams than the strategy needs (`Majority`; a faulty word, with bits
+    /// above the cams, does not count, so a passage of faulty words only has `got` 0).
     TooFewSamples {
         /// Readings with cams that were taken.
         got: u16,
@@ -382,7 +383,9 @@ impl Voter {
 
     fn majority_verdict(&self, needed: u16) -> Verdict {
         let got = self.with_cams;
-        if got == 0 {
+        // No cams only when no reading had any (as for `Consecutive`): faulty words have cams,
+        // and a passage of nothing else is too few usable readings, not an empty hook.
+        if got == 0 && self.no_cams == self.samples {
             return Verdict::NoRead(NoRead::NoCams);
         }
         if got < needed {
@@ -469,6 +472,26 @@ impl Voter {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_passage_of_faulty_words_only_is_too_few_samples_not_no_cams() {
+        let mut majority = Voter::new(Strategy::Majority { min_samples: 1 }).unwrap();
+        let p = majority.vote(&[0xFFFF, 0x2000]);
+        assert_eq!(
+            p.verdict,
+            Verdict::NoRead(NoRead::TooFewSamples { got: 0, needed: 1 })
+        );
+        assert_eq!(
+            majority.vote(&[0, 0]).verdict,
+            Verdict::NoRead(NoRead::NoCams)
+        );
+        assert_eq!(majority.vote(&[]).verdict, Verdict::NoRead(NoRead::NoCams));
+        let mut consecutive = Voter::new(Strategy::Consecutive { k: 1 }).unwrap();
+        assert_eq!(
+            consecutive.vote(&[0xFFFF]).verdict,
+            Verdict::NoRead(NoRead::NoAgreement)
+        );
+    }
     use crate::code::encode;
 
     fn id(n: u16) -> TrolleyId {

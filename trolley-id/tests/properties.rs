@@ -74,7 +74,8 @@ fn model_majority(readings: &[u16], min: u16) -> Verdict {
         .filter(|&r| r != 0 && r < 0x2000)
         .collect();
     let got = votes.len() as u16;
-    if got == 0 {
+    // No cams only when no reading had any: faulty words (bits above the cams) have cams.
+    if readings.iter().all(|&r| r == 0) {
         return Verdict::NoRead(NoRead::NoCams);
     }
     if got < min {
