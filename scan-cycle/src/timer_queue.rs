@@ -125,8 +125,9 @@ impl fmt::Display for UnknownTimer {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "no waiting timer has handle {:?}: it expired or was removed",
-            self.0
+            "no waiting timer has the handle of place {}, use {}: it expired, was removed or \
+             never existed in this queue",
+            self.0.index, self.0.generation
         )
     }
 }
@@ -286,7 +287,8 @@ impl<A, const N: usize> TimerQueue<A, N> {
         self.release(id.index)
     }
 
-    /// Ticks pending before `id` expires (≥ 1), or `None` for a stale handle.
+    /// Ticks pending before `id` expires (≥ 1; 0 for one left due by a panic in `on_expire`,
+    /// see [`tick`](Self::tick)), or `None` for a stale handle.
     #[must_use]
     pub fn remaining(&self, id: TimerId) -> Option<u32> {
         let e = self
@@ -297,6 +299,11 @@ impl<A, const N: usize> TimerQueue<A, N> {
     }
 
     /// One tick: every action whose time has come goes to `on_expire`, in order.
+    ///
+    /// Should `on_expire` panic and the panic be caught (on a host), that one action is gone
+    /// (its timer expired) and nothing else is lost: the queue is whole again as the panic
+    /// leaves `tick`, and the actions due on the same tick after it stay waiting
+    /// ([`remaining`](Self::remaining) 0) and come out first, in order, on the next `tick`.
     pub fn tick(&mut self, mut on_expire: impl FnMut(A)) {
         self.now = self.now.wrapping_add(1);
         // Entering a new block of 256 ticks: the higher levels may have entries for it. Most
@@ -307,29 +314,68 @@ impl<A, const N: usize> TimerQueue<A, N> {
         let Some(head) = self.heads.get_mut(level_slot(0, self.now)) else {
             return;
         };
-        let mut index = core::mem::replace(head, NIL);
-        let (mut free, mut expired) = (self.free, 0usize);
+        let rest = core::mem::replace(head, NIL);
+        let free = self.free;
+        // The free list and the length are written back once, when `run` is dropped: after the
+        // loop, or as a panic in `on_expire` unwinds (see `Expiry`).
+        let mut run = Expiry {
+            queue: self,
+            rest,
+            free,
+            expired: 0,
+        };
         // The list ends at NIL, which is no entry's index (N < u32::MAX).
-        while let Some(e) = self.entries.get_mut(idx(index)) {
-            let next = e.next;
+        while let Some(e) = run.queue.entries.get_mut(idx(run.rest)) {
+            let index = run.rest;
+            run.rest = e.next;
             if let Some(action) = e.action.take() {
-                expired = expired.wrapping_add(1);
+                run.expired = run.expired.wrapping_add(1);
                 match e.generation.checked_add(1) {
                     Some(generation) => {
                         e.generation = generation;
-                        e.next = free;
-                        free = index;
+                        e.next = run.free;
+                        run.free = index;
                     }
                     // See `release`: the place is retired.
                     None => e.next = NIL,
                 }
                 on_expire(action);
             }
-            index = next;
         }
-        self.free = free;
-        // Each expired entry was counted in `len` when it was inserted.
-        self.len = self.len.wrapping_sub(expired);
+    }
+
+    /// Puts the list starting at `first` (the entries a panic in `on_expire` left unhanded; their
+    /// links as in their slot, the last one's `next` NIL) in front of the next tick's level-0
+    /// slot, keeping the order of both.
+    #[cold]
+    fn put_first_in_next_slot(&mut self, first: u32) {
+        let slot = level_slot(0, self.now.wrapping_add(1));
+        let Ok(slot_index) = u16::try_from(slot) else {
+            return;
+        };
+        // Walk the list to its last entry, renaming each entry's slot.
+        let mut last = first;
+        let mut index = first;
+        while let Some(e) = self.entries.get_mut(idx(index)) {
+            e.slot = slot_index;
+            last = index;
+            index = e.next;
+        }
+        let Some(head) = self.heads.get_mut(slot) else {
+            return;
+        };
+        let old_first = core::mem::replace(head, first);
+        // The new first names the last of the whole list: the old list's last, or its own.
+        let whole_last = match self.entries.get_mut(idx(old_first)) {
+            Some(o) => core::mem::replace(&mut o.prev, last),
+            None => last,
+        };
+        if let Some(l) = self.entries.get_mut(idx(last)) {
+            l.next = old_first;
+        }
+        if let Some(f) = self.entries.get_mut(idx(first)) {
+            f.prev = whole_last;
+        }
     }
 
     /// Number of waiting timers.
@@ -543,6 +589,30 @@ fn low32(ticks: u64) -> u32 {
 #[inline]
 fn idx(index: u32) -> usize {
     usize::try_from(index).unwrap_or(usize::MAX)
+}
+
+/// A tick's expiry in progress: the entries of the tick's slot not yet handed out (`rest`), the
+/// free list with the handed-out entries' places on it, and their count. Dropped after the loop
+/// it writes the free list and the length back; dropped by a panic in `on_expire` it also puts
+/// the entries not yet handed out at the front of the next tick's slot, so they stay waiting and
+/// come out first on the next tick.
+struct Expiry<'q, A, const N: usize> {
+    queue: &'q mut TimerQueue<A, N>,
+    rest: u32,
+    free: u32,
+    expired: usize,
+}
+
+impl<A, const N: usize> Drop for Expiry<'_, A, N> {
+    fn drop(&mut self) {
+        let q = &mut *self.queue;
+        q.free = self.free;
+        // Each expired entry was counted in `len` when it was inserted.
+        q.len = q.len.wrapping_sub(self.expired);
+        if self.rest != NIL {
+            q.put_first_in_next_slot(self.rest);
+        }
+    }
 }
 
 #[cfg(test)]
