@@ -4,6 +4,7 @@
 pub mod count_down;
 pub mod dock;
 pub mod highway;
+pub mod master;
 pub mod naive_decode;
 pub mod pid_loop;
 pub mod pid_shapes;
