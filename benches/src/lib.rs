@@ -8,5 +8,6 @@ pub mod master;
 pub mod naive_decode;
 pub mod pid_loop;
 pub mod pid_shapes;
+pub mod report;
 pub mod ring_pairs;
 pub mod scan;
