@@ -651,7 +651,8 @@ Each of regler's hot paths beside its **anchor** — what a user would pick inst
 crate, `heapless::spsc`) or the source system's own method (the count-down registers) — measured
 in the same run. Two measures: **instructions** counted by valgrind's callgrind on the host
 (x86-64), each counter run with N and 2N operations and (total(2N) − total(N)) / N taken, so
-start-up cancels and the figure repeats exactly; and **median times** from criterion, which are
+start-up cancels (N is passed with 12 digits, so both runs' arguments have the same length and
+their start-up costs the same wherever the checkout is) and the figure repeats exactly; and **median times** from criterion, which are
 noisy on a shared machine and secondary. The ratio to read is regler / anchor: below 1.00× regler
 is cheaper.
 
