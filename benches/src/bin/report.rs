@@ -55,6 +55,11 @@ struct Args {
     /// Criterion measurement time per benchmark, seconds.
     #[arg(long, default_value_t = 1.0, value_name = "SECONDS")]
     measure: f64,
+    /// Also run criterion's two-thread transfer (10 × 10 million items through the split
+    /// halves and through heapless's): two spinning threads on a shared or loaded machine can
+    /// take many minutes, so it is left out unless asked for.
+    #[arg(long)]
+    with_threads: bool,
     /// Instruction counters run at once (default: the machine's cores).
     #[arg(long, value_name = "N")]
     jobs: Option<usize>,
@@ -311,7 +316,7 @@ fn walk(dir: &Path, found: &mut Vec<PathBuf>) {
 
 /// Runs every criterion bench with its results in a fresh directory (so neither old results nor
 /// the user's baselines are touched) and reads each benchmark's median.
-fn criterion(warm_up: f64, measure: f64) -> Result<BTreeMap<String, f64>, Error> {
+fn criterion(warm_up: f64, measure: f64, threads: bool) -> Result<BTreeMap<String, f64>, Error> {
     let home = std::env::temp_dir().join(format!("regler-report-criterion-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&home);
     let mut medians = BTreeMap::new();
@@ -330,6 +335,7 @@ fn criterion(warm_up: f64, measure: f64) -> Result<BTreeMap<String, f64>, Error>
             ])
             .args(["--warm-up-time", &warm_up.to_string()])
             .args(["--measurement-time", &measure.to_string()])
+            .args((bench == "ring_transfer" && !threads).then_some("^ring/(pair|scheduler)"))
             .env("CRITERION_HOME", &home)
             .stdout(Stdio::piped());
             let mut child = cmd
@@ -448,7 +454,7 @@ fn run(args: &Args) -> Result<bool, Error> {
                     .insert(p, provenance(format!("{compiler}, QEMU")));
             }
             Part::Criterion => {
-                fresh.medians = criterion(args.warm_up, args.measure)?;
+                fresh.medians = criterion(args.warm_up, args.measure, args.with_threads)?;
                 fresh.provenance.insert(p, provenance(compiler.clone()));
             }
         }
