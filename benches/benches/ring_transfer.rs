@@ -9,8 +9,9 @@ use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use heapless::spsc::Queue;
+use regler_benches::master::Scheduler;
 use regler_benches::ring_pairs::{SLOTS, Shape, run};
-use regler_ring_transfer::{Master, Report, SharedRing, SlaveParams};
+use regler_ring_transfer::SharedRing;
 
 /// 10 000 pairs per iteration (the ring's set-up, a box and 128 items, is about 1 % of that) through the shared loop (`regler_benches::ring_pairs`), each
 /// contestant in both shapes: `firmware` (each operation an out-of-line call on state in memory)
@@ -86,65 +87,15 @@ fn two_threads(c: &mut Criterion) {
     group.finish();
 }
 
-/// A master with `n` slaves of mixed rates and rings in steady state: each iteration is one
-/// decision (`next_refill`) and the served slave's next report (one heap update each).
+/// A master with `n` slaves of mixed rates and rings in steady state
+/// (`regler_benches::master`): each iteration is one decision (`next_refill`) and the served
+/// slave's next report (one heap update each).
 fn scheduler(c: &mut Criterion) {
     let mut group = c.benchmark_group("ring/scheduler decision");
     for n in [8usize, 80, 500] {
-        let mut master: Box<Master<512>> = Box::default();
-        let mut consumed = vec![0u16; n];
-        for i in 0..n {
-            let t0 = 2_000 + (i as u32 * 37) % 400;
-            let capacity = 64 + (i as u16 * 13) % 192;
-            master
-                .attach(i, SlaveParams { capacity, t0 })
-                .expect("slave");
-            let hello = Report {
-                slave: 0,
-                consumed: 0,
-                received: 0,
-                standalone: false,
-                retry: false,
-                boot: 0,
-                hello: false,
-            };
-            master.on_report(0, i, &hello).expect("report");
-        }
-        // Serve everything owed, then run in steady state.
-        while master.next_refill(0, 64).is_some() {}
-        let mut now = 0u64;
+        let mut scheduler = Scheduler::new(n).expect("slaves in range");
         group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
-            b.iter(|| {
-                now += 1;
-                if let Some(grant) = master.next_refill(now, 1) {
-                    let s = grant.slave;
-                    consumed[s] = consumed[s].wrapping_add(1);
-                    let r = Report {
-                        slave: 0,
-                        consumed: consumed[s],
-                        received: consumed[s].wrapping_add(64),
-                        standalone: false,
-                        retry: false,
-                        boot: 0,
-                        hello: false,
-                    };
-                    black_box(master.on_report(now, s, &r).ok());
-                } else {
-                    // Nothing owed: every slave reports one more consumption.
-                    let s = (now as usize) % n;
-                    consumed[s] = consumed[s].wrapping_add(1);
-                    let r = Report {
-                        slave: 0,
-                        consumed: consumed[s],
-                        received: consumed[s].wrapping_add(64),
-                        standalone: false,
-                        retry: false,
-                        boot: 0,
-                        hello: false,
-                    };
-                    black_box(master.on_report(now, s, &r).ok());
-                }
-            })
+            b.iter(|| black_box(scheduler.step()))
         });
     }
     group.finish();

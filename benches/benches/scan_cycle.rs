@@ -1,4 +1,4 @@
-//! `TimerQueue::tick` beside the count-down register at 16, 256 and 4 096 timers (one expiry per
+//! `TimerQueue::tick` beside the count-down register at 16, 256, 4 096 and 10 000 timers (one expiry per
 //! tick), and one full cycle at the 1977 plant's sizes.
 
 use std::hint::black_box;
@@ -24,6 +24,7 @@ fn timers(c: &mut Criterion) {
     size!(16);
     size!(256);
     size!(4096);
+    size!(10000);
     group.finish();
 }
 

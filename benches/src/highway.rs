@@ -132,6 +132,15 @@ pub fn run(which: &str, rounds: u64) -> Option<u64> {
                 }
                 u64::from(out[0])
             }
+            // The controller's anchor: each byte passed on one clock later.
+            "delay" => {
+                let mut held = 0xE0u8;
+                for (o, &i) in out.iter_mut().zip(std::hint::black_box(&bytes)) {
+                    *o = held;
+                    held = i;
+                }
+                u64::from(out[0])
+            }
             _ => return None,
         };
     }

@@ -4,8 +4,10 @@
 pub mod count_down;
 pub mod dock;
 pub mod highway;
+pub mod master;
 pub mod naive_decode;
 pub mod pid_loop;
 pub mod pid_shapes;
+pub mod report;
 pub mod ring_pairs;
 pub mod scan;

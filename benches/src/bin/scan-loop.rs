@@ -1,5 +1,5 @@
 //! Instruction counts for the scan-cycle hot paths:
-//! `scan-loop <wheel|count-down> <16|256|4096> <ticks>` or `scan-loop cycle 0 <cycles>`;
+//! `scan-loop <wheel|count-down> <16|256|4096|10000> <ticks>` or `scan-loop cycle 0 <cycles>`;
 //! use with `scripts/instructions-per-op 131072 target/release/scan-loop wheel 4096 {N}` (a
 //! multiple of 256 ticks: the queue moves a 256-tick block's timers down once per block).
 
@@ -10,7 +10,7 @@ use regler_benches::scan::{CountDownTimers, Plant1977, WheelTimers, cycle_1977, 
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let usage = "usage: scan-loop <wheel|count-down|cycle> <16|256|4096> <count>";
+    let usage = "usage: scan-loop <wheel|count-down|cycle> <16|256|4096|10000> <count>";
     let [which, size, count] = args.as_slice() else {
         eprintln!("{usage}");
         return ExitCode::from(2);
@@ -35,6 +35,12 @@ fn main() -> ExitCode {
         }
         ("wheel", "4096") => {
             let mut w = WheelTimers::<4096>::steady(4096);
+            for _ in 0..count {
+                sum += u64::from(black_box(w.tick()));
+            }
+        }
+        ("wheel", "10000") => {
+            let mut w = WheelTimers::<10_000>::steady(10_000);
             for _ in 0..count {
                 sum += u64::from(black_box(w.tick()));
             }
