@@ -365,6 +365,10 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "statistics over 800 000 draws: hours under Miri; safe integer code, run natively"
+    )]
     fn noise_rate_is_what_was_asked_and_repeatable() {
         for rate in [0.0, 1e-3, 0.05, 0.5] {
             let mut a = Noise::new(rate, 42).unwrap();
@@ -388,6 +392,10 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "statistics over 400 000 draws: hours under Miri; safe integer code, run natively"
+    )]
     fn noise_flips_every_bit_position_alike() {
         let mut noise = Noise::new(0.02, 3).unwrap();
         let mut per_bit = [0u32; 8];

@@ -412,6 +412,21 @@ fixed_scalar!(FixedI64, LeEqU64, i64, i128);
 mod tests {
     use super::*;
 
+    /// Samples in the sweeps below: two million natively; under Miri, which interprets every
+    /// instruction, 4 000 (every exponent is still visited 15 times).
+    const SWEEP: u32 = if cfg!(miri) { 4_000 } else { 2_000_000 };
+
+    /// 2^e, exactly, for a normal exponent (−1022 ≤ e ≤ 1023). `powi`'s precision is unspecified
+    /// (Miri perturbs it on purpose), so a check's constants are built from their bits.
+    fn pow2(e: i32) -> f64 {
+        f64::from_bits(u64::try_from(1023 + e).unwrap_or(0) << 52)
+    }
+
+    /// 2^e as an `f32`, exactly, for a normal exponent (−126 ≤ e ≤ 127).
+    fn pow2f(e: i32) -> f32 {
+        f32::from_bits(u32::try_from(127 + e).unwrap_or(0) << 23)
+    }
+
     #[test]
     fn floats_convert_saturating_and_keep_faults() {
         assert_eq!(<f32 as Scalar>::from_f64(0.5), 0.5f32);
@@ -465,7 +480,7 @@ mod tests {
             ($t:ty, $v:expr) => {{
                 let v: f64 = $v;
                 let got = <$t as Scalar>::from_f64(v).to_bits();
-                let x = v * 2f64.powi(<$t>::FRAC_NBITS as i32);
+                let x = v * pow2(<$t>::FRAC_NBITS as i32);
                 let (lo, hi) = (
                     i128::from(<$t>::MIN.to_bits()),
                     i128::from(<$t>::MAX.to_bits()),
@@ -481,7 +496,7 @@ mod tests {
                 }
                 // Through f32 too (exact widening), as a Station<_, f32> converts.
                 let narrow = v as f32;
-                let x32 = f64::from(narrow) * 2f64.powi(<$t>::FRAC_NBITS as i32);
+                let x32 = f64::from(narrow) * pow2(<$t>::FRAC_NBITS as i32);
                 let want32 = if narrow.is_nan() {
                     0
                 } else {
@@ -510,14 +525,14 @@ mod tests {
             32768.0,
             -32768.0,
             32767.99999,
-            2f64.powi(31),
-            -2f64.powi(31),
-            2f64.powi(63),
-            -2f64.powi(63),
-            2f64.powi(52) + 1.0,
+            pow2(31),
+            -pow2(31),
+            pow2(63),
+            -pow2(63),
+            pow2(52) + 1.0,
             0.5 - f64::EPSILON / 4.0,
         ];
-        let randoms = (0..200_000u64).map(|n| {
+        let randoms = (0..u64::from(SWEEP) / 10).map(|n| {
             x ^= x << 13;
             x ^= x >> 7;
             x ^= x << 17;
@@ -558,7 +573,7 @@ mod tests {
             x as i32
         };
         let mut signed_error = 0i128;
-        for _ in 0..100_000 {
+        for _ in 0..SWEEP / 20 {
             let (a, b) = (next() >> (next() & 15), next() >> (next() & 15));
             let exact = i128::from(a) * i128::from(b);
             let want =
@@ -576,7 +591,7 @@ mod tests {
     /// Bits spread over the whole f32 range: every exponent, with mantissas from a xorshift.
     fn f32_samples() -> impl Iterator<Item = f32> {
         let mut x: u32 = 0x9E37_79B9;
-        (0..2_000_000u32).map(move |n| {
+        (0..SWEEP).map(move |n| {
             x ^= x << 13;
             x ^= x >> 17;
             x ^= x << 5;
@@ -595,20 +610,20 @@ mod tests {
                 continue;
             }
             assert!(!got.is_subnormal(), "{x:e} -> {got:e}");
-            if x.abs() >= 2f32.powi(-75) || x.is_infinite() {
+            if x.abs() >= pow2f(-75) || x.is_infinite() {
                 assert_eq!(got.to_bits(), x.to_bits(), "{x:e} changed");
             } else {
                 let error = f64::from(got) - f64::from(x);
-                let allowed = 2f64.powi(-23) * (f64::from(x.abs()) + 2f64.powi(-100));
+                let allowed = pow2(-23) * (f64::from(x.abs()) + pow2(-100));
                 assert!(error.abs() <= allowed, "{x:e} -> {got:e}");
-                assert_eq!(got % 2f32.powi(-124), 0.0, "{x:e} -> {got:e} off the grid");
+                assert_eq!(got % pow2f(-124), 0.0, "{x:e} -> {got:e} off the grid");
             }
-            if x.abs() < 2f32.powi(-125) {
+            if x.abs() < pow2f(-125) {
                 assert_eq!(got, 0.0, "{x:e}");
             }
         }
         let mut x: u64 = 0x2545_F491_4F6C_DD1D;
-        for n in 0..2_000_000u64 {
+        for n in 0..u64::from(SWEEP) {
             x ^= x << 13;
             x ^= x >> 7;
             x ^= x << 17;
@@ -619,16 +634,16 @@ mod tests {
                 continue;
             }
             assert!(!got.is_subnormal(), "{v:e} -> {got:e}");
-            if v.abs() >= 2f64.powi(-906) || v.is_infinite() {
+            if v.abs() >= pow2(-906) || v.is_infinite() {
                 assert_eq!(got.to_bits(), v.to_bits(), "{v:e} changed");
             } else {
                 // Scaled up by 2¹⁰⁰⁰ so the check's own arithmetic stays normal.
-                let (g, w) = (got * 2f64.powi(1000), v * 2f64.powi(1000));
-                let allowed = 2f64.powi(-52) * (w.abs() + 2f64.powi(40));
+                let (g, w) = (got * pow2(1000), v * pow2(1000));
+                let allowed = pow2(-52) * (w.abs() + pow2(40));
                 assert!((g - w).abs() <= allowed, "{v:e} -> {got:e}");
-                assert_eq!(got % 2f64.powi(-1013), 0.0, "{v:e} -> {got:e} off the grid");
+                assert_eq!(got % pow2(-1013), 0.0, "{v:e} -> {got:e} off the grid");
             }
-            if v.abs() < 2f64.powi(-1014) {
+            if v.abs() < pow2(-1014) {
                 assert_eq!(got, 0.0, "{v:e}");
             }
         }
@@ -666,7 +681,7 @@ mod tests {
     fn fixed_magnitude_matches_the_default_everywhere() {
         use fixed::types::I16F16;
         let mut x: u32 = 0x0BAD_F00D;
-        for _ in 0..200_000 {
+        for _ in 0..SWEEP / 10 {
             x ^= x << 13;
             x ^= x >> 17;
             x ^= x << 5;

@@ -508,6 +508,10 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "exhaustive sweep of every 1- and 2-bit error: hours under Miri; safe code, run natively"
+    )]
     fn every_error_of_one_and_two_bits_is_caught() {
         // Exhaustive over every position of a report and of a 4-item refill.
         let mut frames: [([u8; MAX_FRAME], usize); 2] = [([0; MAX_FRAME], 0); 2];

@@ -849,6 +849,10 @@ mod tests {
     /// counting; any other (an earlier start) is ignored, moves nothing and is answered by one
     /// session offer (no items, sync, the session's boot) before any grant.
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "exhaustive: 65 536 session and boot pairs: hours under Miri; safe code, run natively in every CI run"
+    )]
     fn hellos_of_earlier_starts_are_ignored_and_answered_with_an_offer() {
         for session in 0..=255u8 {
             for boot in 0..=255u8 {

@@ -732,6 +732,10 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "21 720 clock advances: hours under Miri; safe code, run natively in every CI run"
+    )]
     fn advance_into_the_end_counts_only_the_minutes_the_clock_entered() {
         // Every start second of the last two minutes, every step up to past the end: the count
         // is the minute boundaries crossed up to 23:59, the last minute the clock enters.
@@ -752,6 +756,10 @@ mod tests {
     }
 
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "exhaustive: every slice of up to 6 over 4 values, and slices up to 1 440: hours under Miri; safe code, run natively in every CI run"
+    )]
     fn heap_sort_sorts_every_small_slice_like_core() {
         // Every sequence of length 0..=6 over 4 values (ties included), and longer random ones.
         let mut state = 0x9e37_79b9_7f4a_7c15_u64;

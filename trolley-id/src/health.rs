@@ -529,6 +529,10 @@ mod tests {
     /// that fills `min_passages`, when every passage is a no-read), and every pair it refuses is
     /// one whose window could never hold `min_passages` passages.
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "exhaustive over every accepted window and passage count: hours under Miri; safe code, run natively in every CI run"
+    )]
     fn every_accepted_window_and_min_passages_can_raise_the_alarm() {
         fn sweep<const W: usize>() {
             for min_passages in 0..=(W as u32 + 3) {
