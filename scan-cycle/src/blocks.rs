@@ -57,6 +57,7 @@ impl Elapsed {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "RawTon"))]
 pub struct Ton {
     pt_ms: u32,
     running: Option<Elapsed>,
@@ -111,6 +112,7 @@ impl Ton {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "RawTof"))]
 pub struct Tof {
     pt_ms: u32,
     running: Option<Elapsed>,
@@ -164,6 +166,7 @@ impl Tof {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "RawTp"))]
 pub struct Tp {
     pt_ms: u32,
     running: Option<Elapsed>,
@@ -208,6 +211,136 @@ impl Tp {
             self.done_et = None;
         }
         self.q
+    }
+}
+
+/// Stored timer state (deserialized) that no sequence of calls leaves a timer in — a corrupt or
+/// tampered block — refused, instead of restored into a timer that would come on at once or
+/// give a pulse that never ends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum StoredTimerError {
+    /// A TON with Q on that has not finished: it would be on at once, before PT.
+    TonOnUnfinished,
+    /// A TON that has finished with Q off.
+    TonFinishedOff,
+    /// A TOF whose off-delay has run out with Q still on.
+    TofRunOutOn,
+    /// A TP with Q on and no pulse running: its pulse would never end.
+    TpOnWithoutPulse,
+    /// A TP with a pulse running and Q off.
+    TpPulseOff,
+    /// A TP holding the ET of an ended pulse while IN is off or a pulse runs.
+    TpEndedPulseHeld,
+}
+
+impl core::fmt::Display for StoredTimerError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            StoredTimerError::TonOnUnfinished => {
+                "stored TON has Q on but has not finished: it would be on before PT"
+            }
+            StoredTimerError::TonFinishedOff => "stored TON has finished but has Q off",
+            StoredTimerError::TofRunOutOn => "stored TOF has run out its off-delay but has Q on",
+            StoredTimerError::TpOnWithoutPulse => {
+                "stored TP has Q on without a pulse running: the pulse would never end"
+            }
+            StoredTimerError::TpPulseOff => "stored TP has a pulse running with Q off",
+            StoredTimerError::TpEndedPulseHeld => {
+                "stored TP holds an ended pulse's ET while IN is off or a pulse runs"
+            }
+        })
+    }
+}
+
+impl core::error::Error for StoredTimerError {}
+
+/// The stored form of a [`Ton`], checked on the way in.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct RawTon {
+    pt_ms: u32,
+    running: Option<Elapsed>,
+    q: bool,
+    done_et: Option<u32>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<RawTon> for Ton {
+    type Error = StoredTimerError;
+    fn try_from(r: RawTon) -> Result<Ton, StoredTimerError> {
+        // Q is on exactly when the timer has finished (until IN goes off).
+        match (r.q, r.done_et.is_some()) {
+            (true, false) => Err(StoredTimerError::TonOnUnfinished),
+            (false, true) => Err(StoredTimerError::TonFinishedOff),
+            _ => Ok(Ton {
+                pt_ms: r.pt_ms,
+                running: r.running,
+                q: r.q,
+                done_et: r.done_et,
+            }),
+        }
+    }
+}
+
+/// The stored form of a [`Tof`], checked on the way in.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct RawTof {
+    pt_ms: u32,
+    running: Option<Elapsed>,
+    q: bool,
+    done_et: Option<u32>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<RawTof> for Tof {
+    type Error = StoredTimerError;
+    fn try_from(r: RawTof) -> Result<Tof, StoredTimerError> {
+        if r.q && r.done_et.is_some() {
+            return Err(StoredTimerError::TofRunOutOn);
+        }
+        Ok(Tof {
+            pt_ms: r.pt_ms,
+            running: r.running,
+            q: r.q,
+            done_et: r.done_et,
+        })
+    }
+}
+
+/// The stored form of a [`Tp`], checked on the way in.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct RawTp {
+    pt_ms: u32,
+    running: Option<Elapsed>,
+    q: bool,
+    prev_in: bool,
+    done_et: Option<u32>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<RawTp> for Tp {
+    type Error = StoredTimerError;
+    fn try_from(r: RawTp) -> Result<Tp, StoredTimerError> {
+        // Q is on exactly while a pulse runs; an ended pulse's ET is held only while IN stays on.
+        match (r.q, r.running.is_some()) {
+            (true, false) => return Err(StoredTimerError::TpOnWithoutPulse),
+            (false, true) => return Err(StoredTimerError::TpPulseOff),
+            _ => {}
+        }
+        if r.done_et.is_some() && (r.q || !r.prev_in) {
+            return Err(StoredTimerError::TpEndedPulseHeld);
+        }
+        Ok(Tp {
+            pt_ms: r.pt_ms,
+            running: r.running,
+            q: r.q,
+            prev_in: r.prev_in,
+            done_et: r.done_et,
+        })
     }
 }
 
