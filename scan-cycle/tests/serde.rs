@@ -1,6 +1,11 @@
 //! Retentive state through serde: images and function blocks come back as they were.
 #![cfg(feature = "serde")]
-#![allow(clippy::unwrap_used, reason = "a test may panic: that is how it fails")]
+#![allow(
+    clippy::unwrap_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    reason = "a test may panic: that is how it fails"
+)]
 
 use regler_scan_cycle::{Conditioning, Ctu, DateTime, Image, Tof, Ton, Tp};
 
