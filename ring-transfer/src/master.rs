@@ -446,9 +446,11 @@ impl<const S: usize> Master<S> {
             status.retries = status.retries.saturating_add(1);
             status.sent = status.received;
         }
-        // Items the slave took that the master's count had not reached (skipped after an
-        // underrun, or a master restarted behind its slave): never send them again.
-        status.sent = status.sent.max(status.received);
+        // Items the slave took or used that the master's count had not reached (skipped after
+        // an underrun, or a master restarted behind its slave): never send them again. No slave
+        // reports more used than taken; a frame that does (corrupt, yet past the CRC) is held to
+        // the same rule, so the master never owes more than the ring holds.
+        status.sent = status.sent.max(status.received).max(status.consumed);
         status.standalone = report.standalone;
         link.syncing = false;
         status.linked = !report.standalone;
@@ -689,6 +691,32 @@ mod tests {
             (s.owed, s.deadline, s.stale_reports),
             (2, Some(5 + 2 * 10), 2)
         );
+    }
+
+    /// Found by the fuzz target `ring-transfer/fuzz/fuzz_targets/decode.rs`: a report whose
+    /// consumed count ran ahead of its received count made the master owe more than the ring
+    /// holds and send again items the slave had used.
+    #[test]
+    fn a_report_using_more_than_it_took_never_makes_the_master_owe_more_than_the_ring() {
+        let mut m: Master<1> = Master::new();
+        m.attach(
+            0,
+            SlaveParams {
+                capacity: 4,
+                t0: 10,
+            },
+        )
+        .unwrap();
+        // First report after attach, and a later one: consumed ahead of received.
+        for (consumed, received) in [(10, 4), (30, 12)] {
+            assert_eq!(
+                m.on_report(0, 0, &report(consumed, received)),
+                Ok(ReportOutcome::Accepted { owed: 4 })
+            );
+            let g = m.next_refill(0, 8).unwrap();
+            assert_eq!((g.first, g.count), (u64::from(consumed), 4));
+            assert_eq!(m.status(0).unwrap().owed, 0);
+        }
     }
 
     #[test]

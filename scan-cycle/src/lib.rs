@@ -18,7 +18,7 @@ mod image;
 mod signals;
 mod timer_queue;
 
-pub use blocks::{Ctd, Ctu, Ctud, FTrig, RTrig, Rs, Sr, Tof, Ton, Tp};
+pub use blocks::{Ctd, Ctu, Ctud, FTrig, RTrig, Rs, Sr, StoredTimerError, Tof, Ton, Tp};
 pub use calendar::{
     AddError, Checked, DateTime, Due, InvalidDateTime, MinuteTable, Start, Weekdays,
 };

@@ -66,9 +66,40 @@ impl std::fmt::Display for Request {
 
 type Storage = ModbusStorage<1024, 1024, 32, 32>;
 
-struct Shared {
+/// The Modbus tables the cycle publishes and the requests clients wrote, shared by the
+/// server's threads and the cycle (behind a `Mutex`).
+pub struct Shared {
     storage: Storage,
     requests: Vec<Request>,
+}
+
+impl Default for Shared {
+    fn default() -> Shared {
+        Shared::new()
+    }
+}
+
+impl Shared {
+    /// Tables of zeros, no requests.
+    #[must_use]
+    pub fn new() -> Shared {
+        Shared {
+            storage: Storage::new(),
+            requests: Vec::new(),
+        }
+    }
+
+    /// Copies `sim`'s images, forcing and counters into the tables (the cycle does it after
+    /// every scan).
+    pub fn publish(&mut self, sim: &Simulator) {
+        publish(sim, &mut self.storage);
+    }
+
+    /// The requests written since the last call, in the order they came (the cycle carries
+    /// them out before its next scan).
+    pub fn take_requests(&mut self) -> Vec<Request> {
+        std::mem::take(&mut self.requests)
+    }
 }
 
 /// The Modbus map (documented in examples/README.md). Every address outside it is answered
@@ -401,10 +432,7 @@ pub fn serve(
     let local = listener
         .local_addr()
         .map_err(|e| cli::bad("--modbus", cli::io_message(&e)))?;
-    let shared = Arc::new(Mutex::new(Shared {
-        storage: Storage::new(),
-        requests: Vec::new(),
-    }));
+    let shared = Arc::new(Mutex::new(Shared::new()));
     let counters = Arc::new(Counters::default());
     let idle_time = Duration::from_secs_f64(idle);
     let (state, server_counters) = (Arc::clone(&shared), Arc::clone(&counters));
@@ -458,7 +486,7 @@ pub fn serve(
             break;
         }
         let requests: Vec<Request> = match shared.lock() {
-            Ok(mut s) => std::mem::take(&mut s.requests),
+            Ok(mut s) => s.take_requests(),
             Err(_) => return Err("the Modbus server thread failed".into()),
         };
         for r in requests {
@@ -471,7 +499,7 @@ pub fn serve(
         }
         sim.run(1);
         if let Ok(mut s) = shared.lock() {
-            publish(sim, &mut s.storage);
+            s.publish(sim);
         }
         next += period;
         if let Some(wait) = next.checked_duration_since(Instant::now()) {
@@ -492,7 +520,7 @@ pub fn serve(
 }
 
 /// Carries out one request on the executive: nothing, or ` refused: why`.
-fn carry_out(sim: &mut Simulator, r: Request) -> String {
+pub fn carry_out(sim: &mut Simulator, r: Request) -> String {
     let result = match r {
         Request::ForceOutput(p, v) => sim.plc.force_output(p, v),
         Request::ForceInput(p, v) => sim.plc.force_input(p, v),
@@ -578,68 +606,103 @@ fn client(mut stream: TcpStream, state: &Mutex<Shared>, idle: Duration) -> Resul
     let mut buf = [0u8; 6 + MAX_LENGTH];
     loop {
         stream.read_exact(&mut buf[..7])?;
-        let length = usize::from(u16::from_be_bytes([buf[4], buf[5]]));
-        if !(2..=MAX_LENGTH).contains(&length) || buf[2..4] != [0, 0] {
+        let Some(length) = frame_length(&buf[..7]) else {
             return Err(Ended::Other);
-        }
-        stream.read_exact(&mut buf[7..6 + length])?;
-        let unit = buf[6];
-        let function = buf[7];
-        let pdu = &buf[7..6 + length];
-        let verdict = if answers_unit(unit) {
-            check(pdu)
-        } else {
-            Err(GATEWAY_TARGET_FAILED)
         };
-        // What passed `check` is short (the map is small); rmodbus takes frames of 256 bytes.
-        let mut frame_buf: ModbusFrameBuf = [0; 256];
-        let verdict = verdict.and_then(|()| {
-            frame_buf
-                .get_mut(..6 + length)
-                .ok_or(ILLEGAL_DATA_VALUE)?
-                .copy_from_slice(&buf[..6 + length]);
-            Ok(())
-        });
-        if let Err(code) = verdict {
-            send(&mut stream, &exception(&buf, function, code), idle)?;
-            continue;
-        }
-        let asked = requests(pdu);
-        // rmodbus answers unit 1; 0 and 255 are ours too (see answers_unit).
-        frame_buf[6] = 1;
-        let mut response = Vec::new();
-        let mut frame = ModbusFrame::new(1, &frame_buf, ModbusProto::TcpUdp, &mut response);
-        if frame.parse().is_err() {
-            return Err(Ended::Other);
-        }
-        if frame.processing_required {
-            let Ok(mut s) = state.lock() else {
-                return Err(Ended::Other);
-            };
-            let done = if frame.readonly {
-                frame.process_read(&s.storage).is_ok()
-            } else {
-                let done = frame.process_write(&mut s.storage).is_ok();
-                // Every point the request names acts (module documentation), then the
-                // holding registers, which are commands, read as 0 again.
-                s.requests.extend(asked);
-                s.storage.holdings[..3].fill(0);
-                done
-            };
-            if !done {
-                return Err(Ended::Other);
-            }
-        }
-        if frame.response_required {
-            if frame.finalize_response().is_err() {
-                return Err(Ended::Other);
-            }
-            if let Some(u) = response.get_mut(6) {
-                *u = unit;
-            }
-            send(&mut stream, &response, idle)?;
+        stream.read_exact(&mut buf[7..6 + length])?;
+        match answer(&buf[..6 + length], state) {
+            Answer::Reply(reply) => send(&mut stream, &reply, idle)?,
+            Answer::Silent => {}
+            Answer::Close => return Err(Ended::Other),
         }
     }
+}
+
+/// The length of the frame whose MBAP header (7 bytes) is `header`: the header's length field
+/// plus 6, or `None` when it is no Modbus/TCP frame (a length above [`MAX_LENGTH`] or below 2,
+/// a protocol id other than 0): the connection is closed, its end cannot be known.
+#[must_use]
+pub fn frame_length(header: &[u8]) -> Option<usize> {
+    let length = usize::from(u16::from_be_bytes([*header.get(4)?, *header.get(5)?]));
+    ((2..=MAX_LENGTH).contains(&length) && header.get(2..4)? == [0, 0]).then_some(length)
+}
+
+/// What the server does with one frame.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Answer {
+    /// Sends this reply (a response or an exception).
+    Reply(Vec<u8>),
+    /// Sends nothing (a request that needs no response).
+    Silent,
+    /// Closes the connection.
+    Close,
+}
+
+/// Answers one Modbus/TCP frame, `frame` (the MBAP header and the PDU its length field gives,
+/// as [`frame_length`] found it): an exception for anything [`check`] refuses or a unit id
+/// this server does not answer, else the response, with every point a write names queued for
+/// the cycle ([`Shared::take_requests`]).
+pub fn answer(frame: &[u8], state: &Mutex<Shared>) -> Answer {
+    let (Some(&unit), Some(&function), Some(pdu)) = (frame.get(6), frame.get(7), frame.get(7..))
+    else {
+        return Answer::Close;
+    };
+    if frame.len() > 6 + MAX_LENGTH {
+        return Answer::Close;
+    }
+    let verdict = if answers_unit(unit) {
+        check(pdu)
+    } else {
+        Err(GATEWAY_TARGET_FAILED)
+    };
+    // What passed `check` is short (the map is small); rmodbus takes frames of 256 bytes.
+    let mut frame_buf: ModbusFrameBuf = [0; 256];
+    let verdict = verdict.and_then(|()| {
+        frame_buf
+            .get_mut(..frame.len())
+            .ok_or(ILLEGAL_DATA_VALUE)?
+            .copy_from_slice(frame);
+        Ok(())
+    });
+    if let Err(code) = verdict {
+        return Answer::Reply(exception(frame, function, code));
+    }
+    let asked = requests(pdu);
+    // rmodbus answers unit 1; 0 and 255 are ours too (see answers_unit).
+    frame_buf[6] = 1;
+    let mut response = Vec::new();
+    let mut parsed = ModbusFrame::new(1, &frame_buf, ModbusProto::TcpUdp, &mut response);
+    if parsed.parse().is_err() {
+        return Answer::Close;
+    }
+    if parsed.processing_required {
+        let Ok(mut s) = state.lock() else {
+            return Answer::Close;
+        };
+        let done = if parsed.readonly {
+            parsed.process_read(&s.storage).is_ok()
+        } else {
+            let done = parsed.process_write(&mut s.storage).is_ok();
+            // Every point the request names acts (module documentation), then the
+            // holding registers, which are commands, read as 0 again.
+            s.requests.extend(asked);
+            s.storage.holdings[..3].fill(0);
+            done
+        };
+        if !done {
+            return Answer::Close;
+        }
+    }
+    if !parsed.response_required {
+        return Answer::Silent;
+    }
+    if parsed.finalize_response().is_err() {
+        return Answer::Close;
+    }
+    if let Some(u) = response.get_mut(6) {
+        *u = unit;
+    }
+    Answer::Reply(response)
 }
 
 /// Writes `bytes` within `idle` in all: a client that takes its reply a little at a time is
@@ -669,10 +732,7 @@ mod tests {
     use super::*;
 
     fn state() -> Arc<Mutex<Shared>> {
-        Arc::new(Mutex::new(Shared {
-            storage: Storage::new(),
-            requests: Vec::new(),
-        }))
+        Arc::new(Mutex::new(Shared::new()))
     }
 
     /// A client whose thread cannot be started is closed at once and counted; the loop goes
