@@ -705,7 +705,7 @@ impl<T: Scalar> Pid<T> {
             self.d = d;
             self.yd_old = yd;
             self.r_old = r;
-            self.u_old = applied;
+            self.u_old = self.held(track, u);
             Some(u)
         } else {
             None
@@ -755,7 +755,8 @@ impl<T: Scalar> Pid<T> {
         s.i = bounded;
         // The fast path runs only once started, so only this path marks it.
         self.set_flags(self.flags | STARTED);
-        self.commit(s, r, track)
+        // In manual mode the output stays the operator's: a tracking value moves I only.
+        self.commit(s, r, if manual { None } else { track })
     }
 
     /// The sample's new states and output, computed from the stored ones; nothing is stored.
@@ -855,8 +856,18 @@ impl<T: Scalar> Pid<T> {
         self.d = s.d;
         self.yd_old = s.yd;
         self.r_old = r;
-        self.u_old = track.unwrap_or(s.u);
+        self.u_old = self.held(track, s.u);
         s.u
+    }
+
+    /// The output the next sample's rate limit starts from and a held output repeats: a
+    /// tracking value (the actuator's position) within the limits, or the controller's own.
+    #[inline(always)]
+    pub(crate) fn held(&self, track: Option<T>, u: T) -> T {
+        match track {
+            Some(t) => t.clamp_within(self.ymin, self.ymax),
+            None => u,
+        }
     }
 
     /// A sample whose measurement could not be converted (not finite): the output is held and
@@ -915,9 +926,19 @@ impl<T: Scalar> Pid<T> {
         let mut i = self.i;
         if self.started() {
             let p_after = self.proportional(self.r_old, y_old);
-            i = i.add(p_before).sub(p_after);
+            let moved = i.add(p_before).sub(p_after);
             // The derivative's input under the new weight c: steady readings stay steady.
-            self.yd_old = self.derivative_input(self.r_old, y_old);
+            let yd = self.derivative_input(self.r_old, y_old);
+            if T::both_finite(moved, yd) {
+                i = moved;
+                self.yd_old = yd;
+            } else {
+                // The last set-point is beyond what the new weights can carry (b·r or c·r
+                // overflows a float): the next sample starts afresh as a first sample does (its
+                // derivative input its own, no kick; I kept), where a stored infinity would hold
+                // every later sample with the overflow fault.
+                self.set_flags(self.flags & !STARTED);
+            }
         }
         if !config.kind.has_d() {
             if config.kind.has_i() {

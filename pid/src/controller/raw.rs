@@ -272,7 +272,7 @@ pub(crate) fn step<T: Scalar, R: Raw, const FEEDFORWARD: bool>(
     pid.yd_old = value(yd);
     pid.r_old = r;
     let u = value(u);
-    pid.u_old = track.unwrap_or(u);
+    pid.u_old = pid.held(track, u);
     Some(u)
 }
 
