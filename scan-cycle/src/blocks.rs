@@ -57,7 +57,7 @@ impl Elapsed {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(try_from = "RawTon"))]
+#[cfg_attr(feature = "serde", serde(try_from = "RawTimer"))]
 pub struct Ton {
     pt_ms: u32,
     running: Option<Elapsed>,
@@ -112,7 +112,7 @@ impl Ton {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(try_from = "RawTof"))]
+#[cfg_attr(feature = "serde", serde(try_from = "RawTimer"))]
 pub struct Tof {
     pt_ms: u32,
     running: Option<Elapsed>,
@@ -256,10 +256,11 @@ impl core::fmt::Display for StoredTimerError {
 
 impl core::error::Error for StoredTimerError {}
 
-/// The stored form of a [`Ton`], checked on the way in.
+/// The stored form of a [`Ton`] or a [`Tof`] (their fields, in their order), checked on the way
+/// in by each.
 #[cfg(feature = "serde")]
 #[derive(serde::Deserialize)]
-struct RawTon {
+struct RawTimer {
     pt_ms: u32,
     running: Option<Elapsed>,
     q: bool,
@@ -267,9 +268,9 @@ struct RawTon {
 }
 
 #[cfg(feature = "serde")]
-impl TryFrom<RawTon> for Ton {
+impl TryFrom<RawTimer> for Ton {
     type Error = StoredTimerError;
-    fn try_from(r: RawTon) -> Result<Ton, StoredTimerError> {
+    fn try_from(r: RawTimer) -> Result<Ton, StoredTimerError> {
         // Q is on exactly when the timer has finished (until IN goes off).
         match (r.q, r.done_et.is_some()) {
             (true, false) => Err(StoredTimerError::TonOnUnfinished),
@@ -284,20 +285,10 @@ impl TryFrom<RawTon> for Ton {
     }
 }
 
-/// The stored form of a [`Tof`], checked on the way in.
 #[cfg(feature = "serde")]
-#[derive(serde::Deserialize)]
-struct RawTof {
-    pt_ms: u32,
-    running: Option<Elapsed>,
-    q: bool,
-    done_et: Option<u32>,
-}
-
-#[cfg(feature = "serde")]
-impl TryFrom<RawTof> for Tof {
+impl TryFrom<RawTimer> for Tof {
     type Error = StoredTimerError;
-    fn try_from(r: RawTof) -> Result<Tof, StoredTimerError> {
+    fn try_from(r: RawTimer) -> Result<Tof, StoredTimerError> {
         if r.q && r.done_et.is_some() {
             return Err(StoredTimerError::TofRunOutOn);
         }
