@@ -119,3 +119,64 @@ fn a_change_of_weights_after_an_absurd_setpoint_never_parks_the_controller() {
         }
     }
 }
+
+mod properties {
+    use proptest::prelude::*;
+    use regler_pid::{Config, Inputs, Kind, Pid};
+
+    fn kind() -> impl Strategy<Value = Kind> {
+        proptest::sample::select(Kind::ALL.to_vec())
+    }
+
+    proptest! {
+        /// Any finite set-point, however absurd, then any accepted change of the weights b and
+        /// c: the next sane samples run, none held with a fault, the output within the limits.
+        #[test]
+        fn no_change_of_weights_parks_the_controller(
+            kind in kind(),
+            r in prop_oneof![-f32::MAX..f32::MAX, 1e30f32..f32::MAX, -f32::MAX..-1e30f32],
+            b in 0.0f32..100.0,
+            c in 0.0f32..100.0,
+        ) {
+            let base = Config::<f32> {
+                kind, k: 1.0, ti: 10.0, td: 1.0, h: 0.5, ymin: 0.0, ymax: 10.0, c: 0.0,
+                ..Config::default()
+            };
+            let mut pid = Pid::<f32>::new(&base).unwrap();
+            pid.update(5.0, 5.0);
+            pid.update(r, 5.0);
+            if pid.set_config(&Config { b, c, ..base }).is_ok() {
+                pid.clear_faults();
+                for _ in 0..3 {
+                    let u = pid.update(5.0, 4.0);
+                    prop_assert!(!pid.faults().any(), "{:?}", pid.faults());
+                    prop_assert!((0.0..=10.0).contains(&u));
+                }
+            }
+        }
+
+        /// Any finite tracking value: in manual mode the output stays the operator's; in
+        /// automatic the held output (after a non-finite measurement) is within the limits.
+        #[test]
+        fn a_tracking_value_is_held_within_the_limits_and_never_overrides_manual(
+            track in -f32::MAX..f32::MAX,
+            manual in 0.0f32..=10.0,
+        ) {
+            let cfg = Config::<f32> {
+                kind: Kind::PI, k: 2.0, ti: 10.0, h: 0.5, ymin: 0.0, ymax: 10.0,
+                ..Config::default()
+            };
+            let inputs = Inputs { feedforward: 0.0, track: Some(track) };
+            let mut pid = Pid::<f32>::new(&cfg).unwrap();
+            pid.update(5.0, 5.0);
+            pid.update_with(5.0, 5.0, inputs);
+            let held = pid.update(5.0, f32::NAN);
+            prop_assert_eq!(held, track.clamp(0.0, 10.0));
+            let mut pid = Pid::<f32>::new(&cfg).unwrap();
+            pid.update(5.0, 5.0);
+            pid.set_manual(manual).unwrap();
+            pid.update_with(5.0, 5.0, inputs);
+            prop_assert_eq!(pid.update(5.0, 5.0), manual);
+        }
+    }
+}
