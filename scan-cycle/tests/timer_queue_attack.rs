@@ -115,3 +115,38 @@ fn left_actions_come_first_on_the_next_tick_also_across_a_block() {
         );
     }
 }
+
+proptest::proptest! {
+    /// Any set of timers, any action panicking (caught): every other action still comes out,
+    /// once, in the order of their deadlines and insertion, and the queue ends empty with every
+    /// place back.
+    #[test]
+    fn a_panic_anywhere_loses_only_that_action(
+        delays in proptest::collection::vec(1u32..700, 1..40),
+        panic_at in 0usize..40,
+    ) {
+        let mut q: TimerQueue<usize, 64> = TimerQueue::new();
+        for (k, &d) in delays.iter().enumerate() {
+            q.insert(d, k).unwrap();
+        }
+        // The model: sorted by deadline, ties by insertion; the panicking action dropped.
+        let mut want: Vec<usize> = (0..delays.len()).collect();
+        want.sort_by_key(|&k| (delays[k], k));
+        let victim = want.get(panic_at).copied();
+        want.retain(|&k| Some(k) != victim);
+        let (mut fired, mut panics) = (Vec::new(), 0);
+        for _ in 0..800 {
+            let caught = catch_unwind(AssertUnwindSafe(|| {
+                q.tick(|k| {
+                    assert_ne!(Some(k), victim, "the operator code panics on this one");
+                    fired.push(k);
+                });
+            }));
+            panics += usize::from(caught.is_err());
+        }
+        proptest::prop_assert_eq!(panics, usize::from(victim.is_some()));
+        proptest::prop_assert_eq!(&fired, &want);
+        proptest::prop_assert!(q.is_empty());
+        proptest::prop_assert!((0..64).all(|k| q.insert(1, k).is_ok()));
+    }
+}
