@@ -134,7 +134,7 @@ proptest::proptest! {
         want.sort_by_key(|&k| (delays[k], k));
         let victim = want.get(panic_at).copied();
         want.retain(|&k| Some(k) != victim);
-        let (mut fired, mut panics) = (Vec::new(), 0);
+        let (mut fired, mut panics) = (Vec::new(), 0usize);
         for _ in 0..800 {
             let caught = catch_unwind(AssertUnwindSafe(|| {
                 q.tick(|k| {
@@ -142,7 +142,7 @@ proptest::proptest! {
                     fired.push(k);
                 });
             }));
-            panics += usize::from(caught.is_err());
+            panics = panics.wrapping_add(usize::from(caught.is_err()));
         }
         proptest::prop_assert_eq!(panics, usize::from(victim.is_some()));
         proptest::prop_assert_eq!(&fired, &want);
