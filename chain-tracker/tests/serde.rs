@@ -1,6 +1,6 @@
 //! A tracker's snapshot survives a trip through non-volatile memory (here: JSON).
-#![cfg(feature = "serde")]
 #![allow(clippy::unwrap_used, reason = "a test may panic: that is how it fails")]
+#![cfg(feature = "serde")]
 
 use regler_chain_tracker::{
     DistanceTable, Measurement, Snapshot, StretchConfig, StretchMeter, Tracker,

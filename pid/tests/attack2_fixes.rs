@@ -1,8 +1,8 @@
-#![cfg(feature = "fixed")]
 #![allow(clippy::all, clippy::pedantic, clippy::restriction, missing_docs)]
 //! From a second independent review (issue 24): the reach check of a fixed-point `Station`.
 //! Each closed-loop case is refused by the check, or accepted and then tracks the f64 station;
 //! 3 000 random accepted configurations (every kind, b and c anywhere) never overflow.
+#![cfg(feature = "fixed")]
 use fixed::types::{I16F16, I32F32};
 use regler_pid::{Action, Config, Kind, OperatorLimits, Parameters, Scaling, Station};
 

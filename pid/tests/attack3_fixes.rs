@@ -2,6 +2,7 @@
 //! the output outside the limits, and a change of weights after an absurd set-point that parked
 //! the controller for good. Both predate the fast paths; each test failed before its fix.
 
+#[cfg(feature = "fixed")]
 use fixed::types::I16F16;
 use regler_pid::{Config, Inputs, Kind, Pid};
 
@@ -50,18 +51,21 @@ fn a_held_output_after_tracking_stays_within_the_limits() {
         assert!(pid.faults().non_finite_input());
         assert_eq!(u, want, "track {track}");
     }
-    let f = I16F16::from_num;
-    let mut fixed = Pid::<I16F16>::new(&pi()).unwrap();
-    fixed.update(f(5), f(5));
-    fixed.update_with(
-        f(5),
-        f(5),
-        Inputs {
-            feedforward: f(0),
-            track: Some(I16F16::MAX),
-        },
-    );
-    assert_eq!(fixed.output(), f(10));
+    #[cfg(feature = "fixed")]
+    {
+        let f = I16F16::from_num;
+        let mut fixed = Pid::<I16F16>::new(&pi()).unwrap();
+        fixed.update(f(5), f(5));
+        fixed.update_with(
+            f(5),
+            f(5),
+            Inputs {
+                feedforward: f(0),
+                track: Some(I16F16::MAX),
+            },
+        );
+        assert_eq!(fixed.output(), f(10));
+    }
 }
 
 /// An absurd but finite set-point, then a change of the weights: every kind, in f32 and f64,

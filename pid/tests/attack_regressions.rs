@@ -1,6 +1,6 @@
 //! Regressions for the second attack on issue 24's guarantees (fixed-point reach, scaling ends).
-#![cfg(feature = "fixed")]
 #![allow(clippy::float_cmp, clippy::unwrap_used)]
+#![cfg(feature = "fixed")]
 
 use fixed::types::{I16F16, I32F32};
 use regler_pid::{

@@ -14,7 +14,9 @@ use proptest::prelude::{
     ProptestConfig, any, prop, prop_assert, prop_assert_eq, prop_oneof, proptest,
 };
 use proptest::strategy::{Just, Strategy};
-use regler_pid::{Action, Config, ConfigError, Inputs, Kind, Mode, Parameter, Pid, STATE_BOUND};
+use regler_pid::{Action, Config, Inputs, Kind, Mode, Pid, STATE_BOUND};
+#[cfg(feature = "fixed")]
+use regler_pid::{ConfigError, Parameter};
 
 /// The reference algorithm, written out as the design states it, with the documented state
 /// bounds (`STATE_BOUND` output scales).
@@ -336,6 +338,7 @@ proptest! {
     /// Whatever kind and gain, once `Pid::<I16F16>::new` accepts a configuration, the first
     /// integral step agrees with f64 within the tolerance (and the LSB of the error's product);
     /// a configuration it cannot hold is refused, naming a parameter.
+    #[cfg(feature = "fixed")]
     #[test]
     fn fixed_point_coefficients_are_close_or_refused(
         k_exp in -6.0f64..6.0,
@@ -548,6 +551,7 @@ fn dymax_zero_means_no_limit_in_config_as_at_the_keypad() {
     assert_eq!(pid.update(8.0, 0.0), 8.0, "not frozen");
 }
 
+#[cfg(feature = "fixed")]
 #[test]
 fn unusable_numbers_are_refused_naming_the_parameter() {
     use fixed::types::I16F16;

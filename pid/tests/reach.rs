@@ -1,12 +1,12 @@
 //! The README's rule for what a fixed-point `Station` accepts (`ConfigError::OutOfReach`),
 //! checked against the closed form the README gives (a model, not the implementation).
-#![cfg(feature = "fixed")]
 #![allow(
     clippy::float_cmp,
     clippy::unwrap_used,
     clippy::arithmetic_side_effects,
     clippy::cast_possible_truncation
 )]
+#![cfg(feature = "fixed")]
 
 use fixed::types::{I16F16, I32F32};
 use proptest::prelude::*;

@@ -1,7 +1,7 @@
 //! Stored configurations through serde: they come back as they were, and stored data that
 //! breaks an invariant is an error.
-#![cfg(feature = "serde")]
 #![allow(clippy::unwrap_used, reason = "a test may panic: that is how it fails")]
+#![cfg(feature = "serde")]
 
 use regler_pid::{Config, Pid, Scaling};
 

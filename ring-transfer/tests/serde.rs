@@ -1,7 +1,7 @@
 //! The configuration, statistics and report types round-trip through serde (here: JSON), so a
 //! master can log them and a board can keep its configuration in flash.
-#![cfg(feature = "serde")]
 #![allow(clippy::unwrap_used, reason = "a test may panic: that is how it fails")]
+#![cfg(feature = "serde")]
 
 use regler_ring_transfer::capacity::{LinkSpec, Load, Verdict, check};
 use regler_ring_transfer::{Master, Report, Ring, SlaveConfig, SlaveParams, SlaveStatus, Stats};

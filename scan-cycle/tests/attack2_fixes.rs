@@ -507,6 +507,7 @@ fn check_watchdog_with_every_order() {
 // ---------------------------------------------------------------- 4. set_now_ms
 
 #[test]
+#[cfg(feature = "serde")]
 fn set_now_ms_near_wrap_ton_goes_on() {
     for start in [
         u32::MAX,

@@ -1,6 +1,6 @@
 //! Retentive state across a real power cycle (serde): the executive's clock restarts at 0.
-#![cfg(feature = "serde")]
 #![allow(clippy::unwrap_used)]
+#![cfg(feature = "serde")]
 use regler_scan_cycle::{CycleConfig, Executive, Io, Ton};
 
 struct P(u32);

@@ -1,11 +1,11 @@
 //! Retentive state through serde: images and function blocks come back as they were.
-#![cfg(feature = "serde")]
 #![allow(
     clippy::unwrap_used,
     clippy::panic,
     clippy::indexing_slicing,
     reason = "a test may panic: that is how it fails"
 )]
+#![cfg(feature = "serde")]
 
 use regler_scan_cycle::{Conditioning, Ctu, DateTime, Image, Tof, Ton, Tp};
 

@@ -1,6 +1,6 @@
 //! Serde: a trolley number is its integer, and a number that is no trolley is refused.
-#![cfg(feature = "serde")]
 #![allow(clippy::unwrap_used, reason = "a test may panic: that is how it fails")]
+#![cfg(feature = "serde")]
 
 use regler_trolley_id::{TrolleyId, Verdict};
 
