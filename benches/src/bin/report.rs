@@ -28,8 +28,9 @@ use regler_benches::report::{
 /// Parts: `instructions` (valgrind's callgrind on the counter binaries, N and 2N operations;
 /// needs valgrind), `on-target` (`on-target/cycles` under QEMU: Cortex-M instruction counts),
 /// `criterion` (every criterion bench, short warm-up and measurement). A part not run keeps
-/// its figures from the existing file. The summary, the scaling tables and the READMEs' block
-/// are derived from the figures. Every run (and `--check`) fails when a README's cost statement
+/// its figures from the existing file. The summary, the scaling tables and every README block
+/// (the summary in the workspace README and `benches/README.md`, each crate's own figures in its
+/// README) are derived from the figures. Every run (and `--check`) fails when a README's cost statement
 /// does not hold on the figures (`docs/PERFORMANCE.md`, "Cost statements, checked").
 #[derive(Parser, Debug)]
 #[command(name = "report")]
@@ -41,9 +42,10 @@ struct Args {
     #[arg(long, value_delimiter = ',', value_parser = part)]
     skip: Vec<Part>,
     /// Compare a fresh measurement of the parts that repeat exactly (instructions, on-target)
-    /// with the file instead of writing it; also check that the file's derived tables and the
-    /// READMEs' block match its figures. Exit 1 on any difference. A part measured with
-    /// another compiler than this one is not compared (noted).
+    /// with the file instead of writing it; also check that the file's derived tables and every
+    /// README block match its figures and that every cost statement holds on what was measured.
+    /// Exit 1 on any difference. A part measured with another compiler than this one is not
+    /// compared (noted); its statements are still checked on the fresh figures.
     #[arg(long)]
     check: bool,
     /// Take the on-target tables from this file (e.g. the docs/FOOTPRINT.md that
