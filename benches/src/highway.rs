@@ -45,6 +45,29 @@ pub fn workload() -> Vec<Message> {
         .collect()
 }
 
+/// The workload's messages of its shortest encoded length (`longest` false) or of its longest:
+/// the decoder's cost per byte is compared between the two (`docs/PERFORMANCE.md`, "Cost
+/// statements").
+#[must_use]
+pub fn of_extreme_length(longest: bool) -> Vec<Message> {
+    let messages = workload();
+    let (_, lens) = encoded(&messages);
+    let pick = if longest {
+        lens.iter().max()
+    } else {
+        lens.iter().min()
+    };
+    let Some(&pick) = pick else {
+        return Vec::new();
+    };
+    messages
+        .into_iter()
+        .zip(lens)
+        .filter(|&(_, len)| len == pick)
+        .map(|(m, _)| m)
+        .collect()
+}
+
 /// The messages' bytes back to back, and each message's length.
 #[must_use]
 pub fn encoded(messages: &[Message]) -> (Vec<u8>, Vec<usize>) {
@@ -108,10 +131,16 @@ pub fn copy_all(bytes: &[u8], lens: &[usize], out: &mut [u8]) -> usize {
 }
 
 /// Runs `rounds` passes of `which` (`encode`, `decode`, `copy`, `controller`, `delay`) over the
-/// workload and returns a checksum, or `None` for an unknown `which`.
+/// workload, or of `decode-shortest` / `decode-longest` over its messages of the shortest /
+/// longest encoded length ([`of_extreme_length`]), and returns a checksum, or `None` for an
+/// unknown `which`.
 #[must_use]
 pub fn run(which: &str, rounds: u64) -> Option<u64> {
-    let messages = workload();
+    let messages = match which {
+        "decode-shortest" => of_extreme_length(false),
+        "decode-longest" => of_extreme_length(true),
+        _ => workload(),
+    };
     let (bytes, lens) = encoded(&messages);
     let mut out = vec![0u8; bytes.len()];
     let mut sum = 0u64;
@@ -124,7 +153,9 @@ pub fn run(which: &str, rounds: u64) -> Option<u64> {
     for _ in 0..rounds {
         sum += match which {
             "encode" => encode_all(std::hint::black_box(&messages), &mut out) as u64,
-            "decode" => decode_all(std::hint::black_box(&bytes), &lens) as u64,
+            "decode" | "decode-shortest" | "decode-longest" => {
+                decode_all(std::hint::black_box(&bytes), &lens) as u64
+            }
             "copy" => copy_all(std::hint::black_box(&bytes), &lens, &mut out) as u64,
             "controller" => {
                 for (o, &i) in out.iter_mut().zip(std::hint::black_box(&bytes)) {
@@ -145,4 +176,26 @@ pub fn run(which: &str, rounds: u64) -> Option<u64> {
         };
     }
     Some(sum)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shortest_and_longest_messages_decode_and_are_of_one_length_each() {
+        let (short, long) = (of_extreme_length(false), of_extreme_length(true));
+        let (short_bytes, short_lens) = encoded(&short);
+        let (long_bytes, long_lens) = encoded(&long);
+        assert!(!short.is_empty() && !long.is_empty());
+        let all = encoded(&workload()).1;
+        assert!(short_lens.iter().all(|&l| Some(&l) == all.iter().min()));
+        assert!(long_lens.iter().all(|&l| Some(&l) == all.iter().max()));
+        assert!(short_lens[0] < long_lens[0]);
+        // Every one of them decodes: the counters time real decodes, not early refusals.
+        assert_eq!(decode_all(&short_bytes, &short_lens), short.len());
+        assert_eq!(decode_all(&long_bytes, &long_lens), long.len());
+        assert_eq!(run("decode-shortest", 1), Some(short.len() as u64));
+        assert_eq!(run("decode-longest", 1), Some(long.len() as u64));
+    }
 }

@@ -11,12 +11,26 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use crate::highway::{encoded, workload};
+use crate::highway::{encoded, of_extreme_length, workload};
 
 /// Marks the start of the block the command writes into a README.
 pub const README_BEGIN: &str = "<!-- performance:begin: written by `cargo run --release -p regler-benches --bin report` from docs/PERFORMANCE.md; do not edit by hand -->";
 /// Marks the end of that block.
 pub const README_END: &str = "<!-- performance:end -->";
+
+/// Marks the start of a crate README's own block (`name`: the crate's directory).
+#[must_use]
+pub fn crate_begin(name: &str) -> String {
+    format!(
+        "<!-- performance:{name}:begin: written by `cargo run --release -p regler-benches --bin report` from docs/PERFORMANCE.md; do not edit by hand -->"
+    )
+}
+
+/// Marks the end of a crate README's own block.
+#[must_use]
+pub fn crate_end(name: &str) -> String {
+    format!("<!-- performance:{name}:end -->")
+}
 const ON_TARGET_BEGIN: &str = "<!-- on-target:begin -->";
 const ON_TARGET_END: &str = "<!-- on-target:end -->";
 
@@ -208,7 +222,15 @@ pub fn counters() -> Vec<Counter> {
             50_000,
         ));
     }
-    for which in ["encode", "decode", "copy", "controller", "delay"] {
+    for which in [
+        "encode",
+        "decode",
+        "decode-shortest",
+        "decode-longest",
+        "copy",
+        "controller",
+        "delay",
+    ] {
         c.push(Counter::new("highway-codec", &format!("{which} {{N}}"), 50));
     }
     c
@@ -643,6 +665,62 @@ fn scaling(
     }
 }
 
+fn timer_scaling(s: &mut String, d: &Data) {
+    scaling(
+        s,
+        d,
+        "Timer tick, one expiry re-armed per tick",
+        "timers",
+        &SCALING_SIZES,
+        |n| {
+            Side::new()
+                .count(format!("scan-loop wheel {n} {{N}}"))
+                .time(format!("timer_tick/regler_timer_queue/{n}"), 1.0)
+        },
+        Some(("count-down", &|n| {
+            Side::new()
+                .count(format!("scan-loop count-down {n} {{N}}"))
+                .time(format!("timer_tick/count_down_register/{n}"), 1.0)
+        })),
+    );
+}
+
+fn chain_scaling(s: &mut String, d: &Data) {
+    scaling(
+        s,
+        d,
+        "Chain pulse, a trolley entering every 4 pulses (40 tippers)",
+        "trolleys",
+        &SCALING_SIZES,
+        |n| {
+            Side::new()
+                .count(format!("chain-pulses regler {n} {{N}}"))
+                .time(format!("chain_pulse/regler_tracker/{n}"), 1.0)
+        },
+        Some(("count-down", &|n| {
+            Side::new()
+                .count(format!("chain-pulses count-down {n} {{N}}"))
+                .time(format!("chain_pulse/count_down_register/{n}"), 1.0)
+        })),
+    );
+}
+
+fn master_scaling(s: &mut String, d: &Data) {
+    scaling(
+        s,
+        d,
+        "The master's EDF decision and one slave's report, every slave owed",
+        "slaves",
+        &MASTER_SLAVES,
+        |n| {
+            Side::new()
+                .count(format!("master-decisions {n} {{N}}"))
+                .time(format!("ring/scheduler decision/{n}"), 1.0)
+        },
+        None,
+    );
+}
+
 const HEADER: &str = "# Performance
 
 <!-- Written by `cargo run --release -p regler-benches --bin report` (`--help` for its options); do not edit by hand. -->
@@ -716,53 +794,23 @@ pub fn render(d: &Data) -> String {
         );
     }
     s.push_str("\n## Scaling\n\nOne operation at each size, regler beside the source's method where there is one.\n\n");
-    scaling(
-        &mut s,
-        d,
-        "Timer tick, one expiry re-armed per tick",
-        "timers",
-        &SCALING_SIZES,
-        |n| {
-            Side::new()
-                .count(format!("scan-loop wheel {n} {{N}}"))
-                .time(format!("timer_tick/regler_timer_queue/{n}"), 1.0)
-        },
-        Some(("count-down", &|n| {
-            Side::new()
-                .count(format!("scan-loop count-down {n} {{N}}"))
-                .time(format!("timer_tick/count_down_register/{n}"), 1.0)
-        })),
-    );
-    scaling(
-        &mut s,
-        d,
-        "Chain pulse, a trolley entering every 4 pulses (40 tippers)",
-        "trolleys",
-        &SCALING_SIZES,
-        |n| {
-            Side::new()
-                .count(format!("chain-pulses regler {n} {{N}}"))
-                .time(format!("chain_pulse/regler_tracker/{n}"), 1.0)
-        },
-        Some(("count-down", &|n| {
-            Side::new()
-                .count(format!("chain-pulses count-down {n} {{N}}"))
-                .time(format!("chain_pulse/count_down_register/{n}"), 1.0)
-        })),
-    );
-    scaling(
-        &mut s,
-        d,
-        "The master's EDF decision and one slave's report, every slave owed",
-        "slaves",
-        &MASTER_SLAVES,
-        |n| {
-            Side::new()
-                .count(format!("master-decisions {n} {{N}}"))
-                .time(format!("ring/scheduler decision/{n}"), 1.0)
-        },
-        None,
-    );
+    timer_scaling(&mut s, d);
+    chain_scaling(&mut s, d);
+    master_scaling(&mut s, d);
+    s.push_str(COST_STATEMENTS_INTRO);
+    s.push_str("| crate | statement | measured | bound | holds |\n|---|---|---|---|---|\n");
+    for c in cost_statements(d) {
+        let _ = writeln!(
+            s,
+            "| `regler-{}` | {} | {} | {} | {} |",
+            c.krate,
+            c.statement,
+            c.measured_text(),
+            c.bound_text(),
+            if c.holds() { "yes" } else { "**no**" }
+        );
+    }
+    s.push('\n');
     s.push_str("## On the core\n\nInstructions per call counted by QEMU (`on-target/cycles`; the method is in `docs/FOOTPRINT.md`), one table per core, as that script writes them.\n\n");
     s.push_str(ON_TARGET_BEGIN);
     s.push('\n');
@@ -780,6 +828,541 @@ pub fn render(d: &Data) -> String {
         let _ = writeln!(s, "| `{id}` | {ns:.1} |");
     }
     s
+}
+
+const COST_STATEMENTS_INTRO: &str = "## Cost statements, checked
+
+Each cost sentence of a crate README that the figures above can assert, as that README's block
+prints it, with the figure it bounds. The report fails (exit status 1) when one does not hold:
+when it writes this file and when CI checks it (`--check`), where the counts are re-measured.
+
+";
+
+/// The on-target tables' operations the crate blocks and the cost statements read.
+mod op {
+    pub const PID_F32_ALONE: &str = "Pid<f32>::update alone (its row less the f32 plant, one call)";
+    pub const PID_FIXED_ALONE: &str =
+        "Pid<I16F16>::update alone (its row less the I16F16 plant, one call)";
+    pub const PID_CRATE_CALL: &str =
+        "pid crate Pid<f32>::next_control_output + plant, one call per sample";
+    pub const PLANT_CALL: &str = "plant alone, one call per sample";
+    pub const PID_LOOP: &str = "regler Pid<f32>::update + plant";
+    pub const PID_CRATE_LOOP: &str = "pid crate Pid<f32>::next_control_output + plant";
+    pub const PLANT_LOOP: &str = "plant alone";
+    pub const DECODE: &str = "decode";
+    pub const CLOCK: &str = "highway Controller::clock, one byte of mixed traffic";
+    pub const TICK: &str = "TimerQueue<u16, 256>::tick, one expiry re-armed per tick";
+    pub const PULSE: &str = "Tracker<u16, 256, 8>::pulse, a trolley entering every 4 pulses";
+}
+
+/// The cores of the on-target tables: the target in their header and the name to print.
+const CORES: [(&str, &str); 2] = [
+    ("thumbv7em", "Cortex-M4F (thumbv7em)"),
+    ("thumbv6m", "Cortex-M0 (thumbv6m)"),
+];
+
+/// The cores' names where `f32` matters.
+fn float_core(core: &str) -> &'static str {
+    if core == "thumbv6m" {
+        "Cortex-M0 (thumbv6m, `f32` in soft float)"
+    } else {
+        "Cortex-M4F (thumbv7em, `f32` on the FPU)"
+    }
+}
+
+/// The figure of the row `operation` in the on-target table of `core` (`thumbv7em`,
+/// `thumbv6m`).
+fn on_core(d: &Data, core: &str, operation: &str) -> Option<f64> {
+    let mut in_core = false;
+    for line in d
+        .on_target
+        .iter()
+        .filter(|l| l.trim_start().starts_with('|'))
+    {
+        if line.contains("instructions per call on") {
+            in_core = line.contains(core);
+            continue;
+        }
+        let c = cells(line);
+        if in_core && c.first().map(String::as_str) == Some(operation) {
+            return c.get(1)?.trim_end_matches('×').trim().parse().ok();
+        }
+    }
+    None
+}
+
+fn minus(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    Some(a? - b?)
+}
+
+/// A cost sentence of a crate README, asserted from figures that repeat exactly (callgrind's
+/// and QEMU's instruction counts), never from times.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CostStatement {
+    /// The crate whose README states it (its directory).
+    pub krate: &'static str,
+    /// The statement, as the README's block and `docs/PERFORMANCE.md` print it.
+    pub statement: String,
+    /// The figure it bounds (a ratio, or instructions); `None` when a count is missing.
+    pub measured: Option<f64>,
+    /// The largest figure for which it holds.
+    pub bound: f64,
+    /// `×` for a ratio, ` instructions` for a count.
+    pub unit: &'static str,
+}
+
+impl CostStatement {
+    /// Whether the figure was measured and is within the bound.
+    #[must_use]
+    pub fn holds(&self) -> bool {
+        self.measured.is_some_and(|m| m <= self.bound)
+    }
+
+    fn measured_text(&self) -> String {
+        match self.measured {
+            Some(m) if self.unit == "×" => format!("{m:.2}×"),
+            Some(m) => format!("{}{}", figure(m), self.unit),
+            None => "not measured".into(),
+        }
+    }
+
+    fn bound_text(&self) -> String {
+        if self.unit == "×" {
+            format!("≤ {:.2}×", self.bound)
+        } else {
+            format!("≤ {}{}", figure(self.bound), self.unit)
+        }
+    }
+}
+
+/// The most over the fewest instructions among `keys`; `None` when one is missing.
+fn spread(d: &Data, keys: impl IntoIterator<Item = String>) -> Option<f64> {
+    let v: Vec<f64> = keys
+        .into_iter()
+        .map(|k| d.count(&k))
+        .collect::<Option<_>>()?;
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    div(Some(hi), Some(lo)).filter(|_| lo > 0.0)
+}
+
+/// The serial-highway decoder's instructions per byte over the workload's messages of the
+/// shortest (`longest` false) or the longest encoded length.
+fn decode_per_byte(d: &Data, longest: bool) -> Option<f64> {
+    let which = if longest { "longest" } else { "shortest" };
+    let (bytes, _) = encoded(&of_extreme_length(longest));
+    div(
+        d.count(&format!("highway-codec decode-{which} {{N}}")),
+        Some(bytes.len() as f64),
+    )
+}
+
+fn pid_net(d: &Data, who: &str, shape: &str, load: &str) -> Option<f64> {
+    Side::new()
+        .count(format!("pid-shapes {who} {shape} {load} {{N}}"))
+        .net_of(format!("pid-shapes none {shape} {load} {{N}}"))
+        .instructions(d)
+        .map(|v| v.0)
+}
+
+/// Every cost statement the crate READMEs make that the counts can check.
+#[must_use]
+pub fn cost_statements(d: &Data) -> Vec<CostStatement> {
+    let mut out = Vec::new();
+    let mut put = |krate, statement: String, measured, bound, unit| {
+        out.push(CostStatement {
+            krate,
+            statement,
+            measured,
+            bound,
+            unit,
+        });
+    };
+    for shape in SHAPES {
+        let worst = PID_WORKLOADS
+            .iter()
+            .map(|load| {
+                div(
+                    pid_net(d, "regler", shape, load),
+                    pid_net(d, "pid-crate", shape, load),
+                )
+            })
+            .collect::<Option<Vec<f64>>>()
+            .map(|v| v.into_iter().fold(f64::NEG_INFINITY, f64::max));
+        put(
+            "pid",
+            format!(
+                "`Pid<f32>::update` with every feature on costs no more instructions than the `pid` crate's update in the {shape} shape, on each of the four workloads (x86-64, net)"
+            ),
+            worst,
+            1.0,
+            "×",
+        );
+    }
+    let m4 = |o| on_core(d, "thumbv7em", o);
+    let m0 = |o| on_core(d, "thumbv6m", o);
+    put(
+        "pid",
+        "on a Cortex-M4F, one call per sample, `Pid<f32>::update` costs no more instructions than the `pid` crate's update".into(),
+        div(m4(op::PID_F32_ALONE), minus(m4(op::PID_CRATE_CALL), m4(op::PLANT_CALL))),
+        1.0,
+        "×",
+    );
+    put(
+        "pid",
+        "on a Cortex-M0 (no FPU) `Pid<I16F16>::update` costs at most 0.30× the instructions of a soft-float `Pid<f32>::update`".into(),
+        div(m0(op::PID_FIXED_ALONE), m0(op::PID_F32_ALONE)),
+        0.3,
+        "×",
+    );
+    let (first, rest) = MASTER_SLAVES.split_first().unwrap_or((&8, &[]));
+    for &slaves in rest {
+        let bound = f64::from(slaves).log2() / f64::from(*first).log2();
+        put(
+            "ring-transfer",
+            format!(
+                "the master's EDF decision with one slave's report grows as O(log S): at {slaves} slaves at most log₂ {slaves} / log₂ {first} = {bound:.2}× its instructions at {first} slaves"
+            ),
+            div(
+                d.count(&format!("master-decisions {slaves} {{N}}")),
+                d.count(&format!("master-decisions {first} {{N}}")),
+            ),
+            bound,
+            "×",
+        );
+    }
+    let sizes = || SCALING_SIZES.iter().map(|&n| thousands(n));
+    let (fewest, most) = (
+        sizes().next().unwrap_or_default(),
+        sizes().next_back().unwrap_or_default(),
+    );
+    put(
+        "scan-cycle",
+        format!(
+            "`TimerQueue::tick` is O(1): from {fewest} to {most} timers its instructions per tick (one expiry re-armed per tick) differ by at most 1.50× (the most over the fewest)"
+        ),
+        spread(
+            d,
+            SCALING_SIZES
+                .iter()
+                .map(|n| format!("scan-loop wheel {n} {{N}}")),
+        ),
+        1.5,
+        "×",
+    );
+    put(
+        "chain-tracker",
+        format!(
+            "`Tracker::pulse` is O(1) whatever the number of trolleys: from {fewest} to {most} trolleys its instructions per pulse differ by at most 1.50× (the most over the fewest)"
+        ),
+        spread(
+            d,
+            SCALING_SIZES
+                .iter()
+                .map(|n| format!("chain-pulses regler {n} {{N}}")),
+        ),
+        1.5,
+        "×",
+    );
+    put(
+        "trolley-id",
+        "`decode` of a 13-cam word takes at most 40 instructions per call on a Cortex-M4F and on a Cortex-M0".into(),
+        m4(op::DECODE).zip(m0(op::DECODE)).map(|(a, b)| a.max(b)),
+        40.0,
+        " instructions",
+    );
+    put(
+        "panel-link",
+        "`highway::decode` is O(1) per byte: per byte, the workload's longest messages cost no more than its shortest".into(),
+        div(decode_per_byte(d, true), decode_per_byte(d, false)),
+        1.0,
+        "×",
+    );
+    out
+}
+
+/// The statements of one crate as the lines of a list.
+fn statements_of(d: &Data, krate: &str) -> String {
+    let mut s = String::from(
+        "Checked from these counts on every run of the report and in CI (`cost_statements` in `benches/src/report.rs`; the run fails when one does not hold):\n\n",
+    );
+    for c in cost_statements(d).into_iter().filter(|c| c.krate == krate) {
+        let _ = writeln!(
+            s,
+            "- {}: {} measured ({}){}.",
+            c.statement,
+            c.measured_text(),
+            c.bound_text(),
+            if c.holds() {
+                ""
+            } else {
+                " — **does not hold**"
+            }
+        );
+    }
+    s
+}
+
+fn net(d: &Data, key: &str, base: &str) -> Option<f64> {
+    minus(d.count(key), d.count(base))
+}
+
+fn pid_block(d: &Data) -> String {
+    let mut s = String::from(
+        "Instructions per sample on x86-64 (callgrind), the loop's own cost subtracted, `Pid<f32>::update` with every feature on beside the `pid` crate 4 on the same loop, plant and workload:\n\n| workload | firmware: regler | firmware: `pid` crate | regler / `pid` crate | inlined: regler | inlined: `pid` crate | regler / `pid` crate |\n|---|---|---|---|---|---|---|\n",
+    );
+    for load in PID_WORKLOADS {
+        let _ = write!(s, "| {load} |");
+        for shape in SHAPES {
+            let (r, p) = (
+                pid_net(d, "regler", shape, load),
+                pid_net(d, "pid-crate", shape, load),
+            );
+            let _ = write!(
+                s,
+                " {} | {} | {} |",
+                instr(r.map(|v| (v, None))),
+                instr(p.map(|v| (v, None))),
+                ratio(div(r, p))
+            );
+        }
+        s.push('\n');
+    }
+    s.push_str("\nOn the cores (QEMU, `on-target/cycles`), the plant's own row subtracted: one call per sample (the firmware shape), and in the firmware's measuring loop, where LLVM's size heuristics (opt-level \"s\") decide what is inlined:\n\n| core | one call: regler | one call: `pid` crate | regler / `pid` crate | loop: regler | loop: `pid` crate | regler / `pid` crate |\n|---|---|---|---|---|---|---|\n");
+    for (core, _) in CORES {
+        let name = float_core(core);
+        let g = |o| on_core(d, core, o);
+        let (rc, pc) = (
+            g(op::PID_F32_ALONE),
+            minus(g(op::PID_CRATE_CALL), g(op::PLANT_CALL)),
+        );
+        let (rl, pl) = (
+            minus(g(op::PID_LOOP), g(op::PLANT_LOOP)),
+            minus(g(op::PID_CRATE_LOOP), g(op::PLANT_LOOP)),
+        );
+        let f = |v: Option<f64>| instr(v.map(|v| (v, None)));
+        let _ = writeln!(
+            s,
+            "| {name} | {} | {} | {} | {} | {} | {} |",
+            f(rc),
+            f(pc),
+            ratio(div(rc, pc)),
+            f(rl),
+            f(pl),
+            ratio(div(rl, pl))
+        );
+    }
+    s.push_str("\nFixed point beside `f32`: instructions per closed-loop sample on x86-64 (controller and the same plant step in the same type, `benches/src/pid_loop.rs`), and one update on the cores, called out of line once per sample, its plant's row subtracted:\n\n| type | closed-loop sample, x86-64 | / `f32` |\n|---|---|---|\n");
+    let f32_loop = d.count("pid-loop f32 {N}");
+    for (t, name) in [
+        ("f32", "`f32`"),
+        ("f64", "`f64`"),
+        ("i16f16", "`I16F16`"),
+        ("i32f32", "`I32F32`"),
+    ] {
+        let v = d.count(&format!("pid-loop {t} {{N}}"));
+        let _ = writeln!(
+            s,
+            "| {name} | {} | {} |",
+            instr(v.map(|v| (v, None))),
+            ratio(div(v, f32_loop))
+        );
+    }
+    s.push_str("\n| core | `Pid<f32>::update` | `Pid<I16F16>::update` | `I16F16` / `f32` |\n|---|---|---|---|\n");
+    for (core, _) in CORES {
+        let name = float_core(core);
+        let (f, x) = (
+            on_core(d, core, op::PID_F32_ALONE),
+            on_core(d, core, op::PID_FIXED_ALONE),
+        );
+        let _ = writeln!(
+            s,
+            "| {name} | {} | {} | {} |",
+            instr(f.map(|v| (v, None))),
+            instr(x.map(|v| (v, None))),
+            ratio(div(x, f))
+        );
+    }
+    s.push('\n');
+    s.push_str(&statements_of(d, "pid"));
+    s
+}
+
+fn ring_block(d: &Data) -> String {
+    let mut s = String::from(
+        "Instructions per `receive` + `next` pair on a half-full ring of bytes, x86-64 (callgrind), the loop's own cost subtracted; firmware: each operation an out-of-line call, state in memory; inlined: a tight loop owning the ring:\n\n| contestant | firmware | inlined |\n|---|---|---|\n",
+    );
+    let pair = |who: &str, shape: &str| {
+        net(
+            d,
+            &format!("ring-pairs {who} {shape} {{N}}"),
+            &format!("ring-pairs none {shape} {{N}}"),
+        )
+    };
+    let contestants = [
+        ("ring", "`Ring<u8, 256>`, statistics on (holds 256)"),
+        ("spsc", "heapless `Queue<u8, 256>` (holds 255)"),
+        (
+            "spsc-257",
+            "heapless `Queue<u8, 257>` (holds 256; modulo indices)",
+        ),
+        ("array", "a plain array ring (holds 256)"),
+        (
+            "split",
+            "`Filler` + `Drainer`, `SharedRing<u8, 256>` (holds 255)",
+        ),
+        (
+            "spsc-split",
+            "heapless `Producer` + `Consumer`, `Queue<u8, 256>`",
+        ),
+    ];
+    for (who, name) in contestants {
+        let f = |shape| instr(pair(who, shape).map(|v| (v, None)));
+        let _ = writeln!(s, "| {name} | {} | {} |", f("firmware"), f("inlined"));
+    }
+    s.push_str("\n| ratio | firmware | inlined |\n|---|---|---|\n");
+    for (who, anchor, name) in [
+        ("ring", "spsc", "`Ring<u8, 256>` / `Queue<u8, 256>`"),
+        ("ring", "spsc-257", "`Ring<u8, 256>` / `Queue<u8, 257>`"),
+        (
+            "split",
+            "spsc-split",
+            "`Filler` + `Drainer` / `Producer` + `Consumer`",
+        ),
+    ] {
+        let f = |shape| ratio(div(pair(who, shape), pair(anchor, shape)));
+        let _ = writeln!(s, "| {name} | {} | {} |", f("firmware"), f("inlined"));
+    }
+    s.push('\n');
+    master_scaling(&mut s, d);
+    s.push_str(&statements_of(d, "ring-transfer"));
+    s
+}
+
+fn scan_block(d: &Data) -> String {
+    let mut s = String::new();
+    timer_scaling(&mut s, d);
+    let _ = writeln!(
+        s,
+        "One full cycle at the 1977 plant's sizes (544 debounced inputs, 240 outputs, forcing): {} instructions on x86-64. On a Cortex-M4F a `TimerQueue<u16, 256>::tick` takes {} instructions (QEMU).\n",
+        instr(d.count("scan-loop cycle 0 {N}").map(|v| (v, None))),
+        instr(on_core(d, "thumbv7em", op::TICK).map(|v| (v, None)))
+    );
+    s.push_str(&statements_of(d, "scan-cycle"));
+    s
+}
+
+fn chain_block(d: &Data) -> String {
+    let mut s = String::new();
+    chain_scaling(&mut s, d);
+    let _ = writeln!(
+        s,
+        "On a Cortex-M4F a `Tracker<u16, 256, 8>::pulse` takes {} instructions (QEMU).\n",
+        instr(on_core(d, "thumbv7em", op::PULSE).map(|v| (v, None)))
+    );
+    s.push_str(&statements_of(d, "chain-tracker"));
+    s
+}
+
+fn trolley_block(d: &Data) -> String {
+    let mut s = String::from("| `decode`, per call | instructions (QEMU) |\n|---|---|\n");
+    for (core, name) in CORES {
+        let _ = writeln!(
+            s,
+            "| {name} | {} |",
+            instr(on_core(d, core, op::DECODE).map(|v| (v, None)))
+        );
+    }
+    s.push('\n');
+    s.push_str(&statements_of(d, "trolley-id"));
+    s
+}
+
+fn panel_block(d: &Data) -> String {
+    let mut s = String::from(
+        "| x86-64 (callgrind) | regler, instructions | anchor | anchor, instructions | regler / anchor |\n|---|---|---|---|---|\n",
+    );
+    for row in rows()
+        .into_iter()
+        .filter(|r| r.path.contains("serial-highway") || r.path.contains("controller"))
+    {
+        let (ri, ai) = (row.regler.instructions(d), row.anchor.instructions(d));
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} |",
+            row.path,
+            instr(ri),
+            row.anchor_name,
+            instr(ai),
+            ratio(div(ri.map(|v| v.0), ai.map(|v| v.0)))
+        );
+    }
+    let per_byte = |longest| decode_per_byte(d, longest).map(|v| (v, None));
+    let length = |longest| {
+        let messages = of_extreme_length(longest);
+        encoded(&messages).0.len() / messages.len().max(1)
+    };
+    let _ = writeln!(
+        s,
+        "\n`highway::decode` per byte: {} instructions over the workload's shortest messages ({} bytes), {} over its longest ({} bytes). The crate controller's `clock`, one byte of mixed traffic, on the cores (QEMU): {} instructions on a Cortex-M4F, {} on a Cortex-M0.\n",
+        instr(per_byte(false)),
+        length(false),
+        instr(per_byte(true)),
+        length(true),
+        instr(on_core(d, "thumbv7em", op::CLOCK).map(|v| (v, None))),
+        instr(on_core(d, "thumbv6m", op::CLOCK).map(|v| (v, None))),
+    );
+    s.push_str(&statements_of(d, "panel-link"));
+    s
+}
+
+/// Writes a crate README's block from the figures.
+type BlockWriter = fn(&Data) -> String;
+
+/// A block the report writes into a README, between its markers.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ReadmeBlock {
+    /// The README, from the workspace's root.
+    pub file: &'static str,
+    /// Its begin marker.
+    pub begin: String,
+    /// Its end marker.
+    pub end: String,
+    /// What goes between them.
+    pub text: String,
+}
+
+/// Every README block, written from `d`: the summary in the workspace README and
+/// `benches/README.md`, and each crate's own figures and checked cost statements in its README.
+#[must_use]
+pub fn readme_blocks(d: &Data) -> Vec<ReadmeBlock> {
+    let summary = headline(d);
+    let mut blocks: Vec<ReadmeBlock> = ["README.md", "benches/README.md"]
+        .into_iter()
+        .map(|file| ReadmeBlock {
+            file,
+            begin: README_BEGIN.into(),
+            end: README_END.into(),
+            text: summary.clone(),
+        })
+        .collect();
+    let crates: [(&str, &'static str, BlockWriter); 6] = [
+        ("pid", "pid/README.md", pid_block),
+        ("ring-transfer", "ring-transfer/README.md", ring_block),
+        ("scan-cycle", "scan-cycle/README.md", scan_block),
+        ("chain-tracker", "chain-tracker/README.md", chain_block),
+        ("trolley-id", "trolley-id/README.md", trolley_block),
+        ("panel-link", "panel-link/README.md", panel_block),
+    ];
+    for (name, file, block) in crates {
+        blocks.push(ReadmeBlock {
+            file,
+            begin: crate_begin(name),
+            end: crate_end(name),
+            text: block(d),
+        });
+    }
+    blocks
 }
 
 fn cells(line: &str) -> Vec<String> {
@@ -927,17 +1510,21 @@ pub fn on_target_tables(text: &str) -> Vec<String> {
     out
 }
 
-/// Replaces the block between [`README_BEGIN`] and [`README_END`] in `readme` with `block`;
-/// `None` when the markers are not both there, in that order.
+/// Replaces what lies between the markers `begin` and `end` in `readme` with `block`; `None`
+/// when the markers are not both there, in that order, once each.
 #[must_use]
-pub fn replace_block(readme: &str, block: &str) -> Option<String> {
-    let begin = readme.find(README_BEGIN)?;
-    let after = begin + README_BEGIN.len();
-    let end = after + readme.get(after..)?.find(README_END)?;
+pub fn replace_block(readme: &str, begin: &str, end: &str, block: &str) -> Option<String> {
+    let at = readme.find(begin)?;
+    let after = at + begin.len();
+    let to = after + readme.get(after..)?.find(end)?;
+    let once = |m: &str| readme.matches(m).count() == 1;
+    if !once(begin) || !once(end) {
+        return None;
+    }
     Some(format!(
-        "{}{README_BEGIN}\n{block}{}",
-        readme.get(..begin)?,
-        readme.get(end..)?
+        "{}{begin}\n{block}{}",
+        readme.get(..at)?,
+        readme.get(to..)?
     ))
 }
 
@@ -1117,10 +1704,171 @@ mod tests {
     fn the_readme_block_is_replaced_between_its_markers_only() {
         let readme = format!("a\n{README_BEGIN}\nold\n{README_END}\nb\n");
         assert_eq!(
-            replace_block(&readme, "new\n"),
+            replace_block(&readme, README_BEGIN, README_END, "new\n"),
             Some(format!("a\n{README_BEGIN}\nnew\n{README_END}\nb\n"))
         );
-        assert_eq!(replace_block("no markers", "new\n"), None);
+        assert_eq!(
+            replace_block("no markers", README_BEGIN, README_END, "new\n"),
+            None
+        );
+        // A crate's block beside the summary's: each replaced between its own markers only.
+        let (pb, pe) = (crate_begin("pid"), crate_end("pid"));
+        let both = format!("a\n{README_BEGIN}\nold\n{README_END}\nb\n{pb}\nold pid\n{pe}\nc\n");
+        assert_eq!(
+            replace_block(&both, &pb, &pe, "new pid\n"),
+            Some(format!(
+                "a\n{README_BEGIN}\nold\n{README_END}\nb\n{pb}\nnew pid\n{pe}\nc\n"
+            ))
+        );
+        assert_eq!(
+            replace_block(&both, README_BEGIN, README_END, "new\n"),
+            Some(format!(
+                "a\n{README_BEGIN}\nnew\n{README_END}\nb\n{pb}\nold pid\n{pe}\nc\n"
+            ))
+        );
+        // Another crate's markers are not this crate's; a marker twice or out of order is refused.
+        assert_eq!(
+            replace_block(&both, &crate_begin("pi"), &crate_end("pi"), "x"),
+            None
+        );
+        let twice = format!("{pb}\n{pe}\n{pb}\n{pe}\n");
+        assert_eq!(replace_block(&twice, &pb, &pe, "x"), None);
+        assert_eq!(replace_block(&format!("{pe}\n{pb}\n"), &pb, &pe, "x"), None);
+    }
+
+    fn workspace_file(path: &str) -> String {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .parent()
+            .map(std::path::Path::to_path_buf)
+            .unwrap_or_default();
+        std::fs::read_to_string(root.join(path)).unwrap_or_else(|e| panic!("{path}: {e}"))
+    }
+
+    #[test]
+    fn every_readme_block_is_present_and_is_what_the_report_writes() {
+        let committed = parse(&workspace_file("docs/PERFORMANCE.md"));
+        let blocks = readme_blocks(&committed);
+        for name in [
+            "pid",
+            "ring-transfer",
+            "scan-cycle",
+            "chain-tracker",
+            "trolley-id",
+            "panel-link",
+        ] {
+            assert!(
+                blocks.iter().any(|b| b.file == format!("{name}/README.md")),
+                "no block for {name}"
+            );
+        }
+        for b in blocks {
+            let text = workspace_file(b.file);
+            let replaced = replace_block(&text, &b.begin, &b.end, &b.text);
+            assert!(
+                replaced.is_some(),
+                "{} lacks the markers {}",
+                b.file,
+                b.begin
+            );
+            assert!(
+                replaced.as_deref() == Some(text.as_str()),
+                "{}'s block is stale: run `cargo run --release -p regler-benches --bin report -- --only instructions --on-target-from docs/FOOTPRINT.md`",
+                b.file
+            );
+        }
+    }
+
+    #[test]
+    fn cost_statements_hold_on_the_committed_figures() {
+        let committed = parse(&workspace_file("docs/PERFORMANCE.md"));
+        let statements = cost_statements(&committed);
+        for krate in [
+            "pid",
+            "ring-transfer",
+            "scan-cycle",
+            "chain-tracker",
+            "trolley-id",
+            "panel-link",
+        ] {
+            assert!(statements.iter().any(|c| c.krate == krate), "{krate}");
+        }
+        for c in statements {
+            assert!(c.holds(), "{c:?}");
+        }
+    }
+
+    #[test]
+    fn a_cost_statement_fails_when_its_figure_grows_past_the_bound_or_is_missing() {
+        let committed = parse(&workspace_file("docs/PERFORMANCE.md"));
+        let holds = |d: &Data, krate: &str, what: &str| {
+            cost_statements(d)
+                .into_iter()
+                .filter(|c| c.krate == krate && c.statement.contains(what))
+                .all(|c| c.holds())
+        };
+        let set = |d: &mut Data, key: &str, per_op: String| {
+            if let Some((_, c)) = d.counts.iter_mut().find(|(k, _)| k == key) {
+                c.per_op = per_op;
+            }
+        };
+        // A tick that became O(N): 16 → 10 000 timers 10× the instructions.
+        let mut d = committed.clone();
+        let few = d.count("scan-loop wheel 16 {N}").unwrap_or(0.0);
+        set(
+            &mut d,
+            "scan-loop wheel 10000 {N}",
+            format!("{:.1}", few * 10.0),
+        );
+        assert!(holds(&committed, "scan-cycle", "TimerQueue"));
+        assert!(!holds(&d, "scan-cycle", "TimerQueue"));
+        // A pulse that grows linearly with the trolleys.
+        let mut d = committed.clone();
+        let few = d.count("chain-pulses regler 16 {N}").unwrap_or(0.0);
+        set(
+            &mut d,
+            "chain-pulses regler 4096 {N}",
+            format!("{:.1}", few * 2.0),
+        );
+        assert!(!holds(&d, "chain-tracker", "pulse"));
+        // An EDF decision linear in the slaves: 500 / 8 = 62.5×.
+        let mut d = committed.clone();
+        let few = d.count("master-decisions 8 {N}").unwrap_or(0.0);
+        set(
+            &mut d,
+            "master-decisions 500 {N}",
+            format!("{:.1}", few * 62.5),
+        );
+        assert!(!holds(&d, "ring-transfer", "EDF"));
+        // A regler update dearer than the `pid` crate's in one workload.
+        let mut d = committed.clone();
+        set(
+            &mut d,
+            "pid-shapes regler inlined noise {N}",
+            "999.0".into(),
+        );
+        assert!(holds(&d, "pid", "firmware shape"));
+        assert!(!holds(&d, "pid", "inlined shape"));
+        // A decoder whose cost per byte grows with the message (0.60× → 1.20×).
+        let mut d = committed.clone();
+        let long = d.count("highway-codec decode-longest {N}").unwrap_or(0.0);
+        set(
+            &mut d,
+            "highway-codec decode-longest {N}",
+            format!("{:.1}", long * 2.0),
+        );
+        assert!(!holds(&d, "panel-link", "per byte"));
+        // On the cores: a slower decode, a fixed-point update no cheaper than soft float.
+        let mut d = committed.clone();
+        for line in &mut d.on_target {
+            if line.starts_with("| decode |") {
+                *line = "| decode | 41.0 |".into();
+            }
+        }
+        assert!(!holds(&d, "trolley-id", "decode"));
+        // A missing figure is a statement not checked: it fails.
+        let mut d = committed;
+        d.on_target.clear();
+        assert!(!holds(&d, "pid", "Cortex-M0"));
     }
 
     #[test]

@@ -1,13 +1,14 @@
 //! Runs `rounds` passes over the 1 024-message serial-highway workload for instruction counting:
-//! `highway-codec <encode|decode|copy|controller|delay> <rounds>`; with
+//! `highway-codec <encode|decode|decode-shortest|decode-longest|copy|controller|delay> <rounds>`; with
 //! `scripts/instructions-per-op 200 target/release/highway-codec decode {N}` what is left is
-//! instructions per pass (1 024 messages, 9 084 bytes).
+//! instructions per pass (1 024 messages, 9 084 bytes; `decode-shortest` / `decode-longest`: the
+//! workload's messages of its shortest / longest encoded length only).
 
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let usage = "usage: highway-codec <encode|decode|copy|controller|delay> <rounds>";
+    let usage = "usage: highway-codec <encode|decode|decode-shortest|decode-longest|copy|controller|delay> <rounds>";
     let [which, rounds] = args.as_slice() else {
         eprintln!("{usage}");
         return ExitCode::from(2);

@@ -1,6 +1,7 @@
 //! The whole performance report in one command: criterion medians, instruction counts (N and 2N
 //! under callgrind, both shapes) and the on-target counts, written to `docs/PERFORMANCE.md` and
-//! summed up between the markers of `README.md` and `benches/README.md`.
+//! summed up between the markers of `README.md` and `benches/README.md`; each crate README gets
+//! its own figures and its cost statements, which the run asserts (`cost_statements`).
 //!
 //! ```sh
 //! cargo run --release -p regler-benches --bin report                     # everything (~15 min)
@@ -18,8 +19,8 @@ use std::time::Instant;
 
 use clap::Parser;
 use regler_benches::report::{
-    BENCHES, Count, Counter, Data, Part, Provenance, counters, differences, headline,
-    on_target_tables, parse, render, replace_block,
+    BENCHES, Count, Counter, Data, Part, Provenance, cost_statements, counters, differences,
+    on_target_tables, parse, readme_blocks, render, replace_block,
 };
 
 /// Measures regler's hot paths beside their anchors and writes docs/PERFORMANCE.md.
@@ -27,8 +28,10 @@ use regler_benches::report::{
 /// Parts: `instructions` (valgrind's callgrind on the counter binaries, N and 2N operations;
 /// needs valgrind), `on-target` (`on-target/cycles` under QEMU: Cortex-M instruction counts),
 /// `criterion` (every criterion bench, short warm-up and measurement). A part not run keeps
-/// its figures from the existing file. The summary, the scaling tables and the READMEs' block
-/// are derived from the figures.
+/// its figures from the existing file. The summary, the scaling tables and every README block
+/// (the summary in the workspace README and `benches/README.md`, each crate's own figures in its
+/// README) are derived from the figures. Every run (and `--check`) fails when a README's cost statement
+/// does not hold on the figures (`docs/PERFORMANCE.md`, "Cost statements, checked").
 #[derive(Parser, Debug)]
 #[command(name = "report")]
 struct Args {
@@ -39,9 +42,10 @@ struct Args {
     #[arg(long, value_delimiter = ',', value_parser = part)]
     skip: Vec<Part>,
     /// Compare a fresh measurement of the parts that repeat exactly (instructions, on-target)
-    /// with the file instead of writing it; also check that the file's derived tables and the
-    /// READMEs' block match its figures. Exit 1 on any difference. A part measured with
-    /// another compiler than this one is not compared (noted).
+    /// with the file instead of writing it; also check that the file's derived tables and every
+    /// README block match its figures and that every cost statement holds on what was measured.
+    /// Exit 1 on any difference. A part measured with another compiler than this one is not
+    /// compared (noted); its statements are still checked on the fresh figures.
     #[arg(long)]
     check: bool,
     /// Take the on-target tables from this file (e.g. the docs/FOOTPRINT.md that
@@ -389,29 +393,56 @@ fn criterion(warm_up: f64, measure: f64, threads: bool) -> Result<BTreeMap<Strin
     Ok(medians)
 }
 
-/// The READMEs' block, updated (writing) or compared (checking).
+/// The READMEs' blocks, updated (writing) or compared (checking).
 fn readmes(data: &Data, write: bool) -> Result<Vec<String>, Error> {
-    let block = headline(data);
     let mut problems = Vec::new();
-    for readme in ["README.md", "benches/README.md"] {
-        let path = root().join(readme);
-        let text = std::fs::read_to_string(&path).map_err(|e| format!("{readme}: {e}"))?;
-        let Some(new) = replace_block(&text, &block) else {
-            problems.push(format!("{readme} has no performance markers"));
+    let mut texts: BTreeMap<&str, (String, String)> = BTreeMap::new();
+    for block in readme_blocks(data) {
+        let readme = block.file;
+        if !texts.contains_key(readme) {
+            let text = std::fs::read_to_string(root().join(readme))
+                .map_err(|e| format!("{readme}: {e}"))?;
+            texts.insert(readme, (text.clone(), text));
+        }
+        let Some((_, new)) = texts.get_mut(readme) else {
             continue;
         };
-        if new != text {
-            if write {
-                std::fs::write(&path, new).map_err(|e| format!("{readme}: {e}"))?;
-                eprintln!("wrote {readme}'s performance block");
-            } else {
-                problems.push(format!(
-                    "{readme}'s performance block is not the summary of docs/PERFORMANCE.md"
-                ));
-            }
+        match replace_block(new, &block.begin, &block.end, &block.text) {
+            Some(replaced) => *new = replaced,
+            None => problems.push(format!(
+                "{readme} lacks the markers `{}` … `{}` (each once, in that order)",
+                block.begin, block.end
+            )),
+        }
+    }
+    for (readme, (old, new)) in texts {
+        if new == old {
+            continue;
+        }
+        if write {
+            std::fs::write(root().join(readme), new).map_err(|e| format!("{readme}: {e}"))?;
+            eprintln!("wrote {readme}'s performance block");
+        } else {
+            problems.push(format!(
+                "{readme}'s performance block is not what the report writes from docs/PERFORMANCE.md"
+            ));
         }
     }
     Ok(problems)
+}
+
+/// The cost statements that do not hold on `data`, one line each.
+fn broken_statements(data: &Data) -> Vec<String> {
+    cost_statements(data)
+        .into_iter()
+        .filter(|c| !c.holds())
+        .map(|c| {
+            format!(
+                "regler-{}: a cost statement does not hold: {} (measured {:?}, bound {})",
+                c.krate, c.statement, c.measured, c.bound
+            )
+        })
+        .collect()
 }
 
 fn run(args: &Args) -> Result<bool, Error> {
@@ -475,7 +506,11 @@ fn run(args: &Args) -> Result<bool, Error> {
                 eprintln!("note: {problem}");
             }
         }
-        return Ok(true);
+        let broken = broken_statements(&fresh);
+        for b in &broken {
+            eprintln!("{b}");
+        }
+        return Ok(broken.is_empty());
     }
     // Checking: the exact parts measured now against the file, where the compiler is the same.
     let mut compared = Vec::new();
@@ -504,6 +539,8 @@ fn run(args: &Args) -> Result<bool, Error> {
     if file == default_output {
         problems.extend(readmes(&committed, false)?);
     }
+    // On what was measured now (the committed figures where a part was not re-measured).
+    problems.extend(broken_statements(&fresh));
     for p in &problems {
         println!("{p}");
     }
