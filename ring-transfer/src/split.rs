@@ -17,8 +17,10 @@
 //! grow (modulo 2³², and the two are never more than `S ≤ 2³¹` apart, so the wrapping difference
 //! is exact), so a cached value is at most behind — the ring looks fuller or emptier than it is,
 //! which costs a read, never an item. The slots are atomics, so even a mistake in this argument
-//! could not be undefined behaviour: it would hand out a wrong item, which the properties in
-//! `tests/properties.rs` (also under Miri, which emulates weak memory) would see.
+//! could not be undefined behaviour, only a wrong item. The orderings rest on this argument, not
+//! on a test: `tests/properties.rs` runs the halves on two threads natively and under Miri
+//! (which emulates weak memory), but on x86-64 every load acquires and every store releases, and
+//! under Miri a copy with the `received` pair made `Relaxed` ran ten minutes without a wrong item.
 
 use core::sync::atomic::{
     AtomicBool, AtomicI8, AtomicI16, AtomicI32, AtomicIsize, AtomicU8, AtomicU16, AtomicU32,
