@@ -355,9 +355,9 @@ fn rows() -> Vec<Row> {
         }
         rows.push(Row {
             group: format!("split halves vs heapless `Producer` + `Consumer`, {shape} shape"),
-            path: format!("`Filler` + `Drainer` (`SharedRing<u8, 256>`) — {shape}"),
+            path: format!("`Filler` + `Drainer` (`SharedRing<u8, 256>`, holds 256) — {shape}"),
             regler: side("split", "regler Filler+Drainer 256"),
-            anchor_name: "heapless `Producer` + `Consumer` (`Queue<u8, 256>`)".into(),
+            anchor_name: "heapless `Producer` + `Consumer` (`Queue<u8, 256>`, holds 255)".into(),
             anchor: side("spsc-split", "heapless Producer+Consumer 256"),
         });
     }
@@ -1209,7 +1209,7 @@ fn ring_block(d: &Data) -> String {
         ("array", "a plain array ring (holds 256)"),
         (
             "split",
-            "`Filler` + `Drainer`, `SharedRing<u8, 256>` (holds 255)",
+            "`Filler` + `Drainer`, `SharedRing<u8, 256>` (holds 256)",
         ),
         (
             "spsc-split",

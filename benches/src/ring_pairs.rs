@@ -1,7 +1,7 @@
 //! One `receive` + `next` pair on a half-full byte ring, for each contestant, in two shapes.
 //!
 //! Contestants: the crate's `Ring<u8, 256>` (statistics on, holds 256) and its split halves
-//! (`SharedRing<u8, 256>` → `Filler` + `Drainer`, holds 255); the anchor
+//! (`SharedRing<u8, 256>` → `Filler` + `Drainer`, holds 256); the anchor
 //! `heapless::spsc::Queue<u8, 256>` (a power of two, as heapless's docs ask; holds 255) used
 //! directly and through its own `Producer` + `Consumer`; `Queue<u8, 257>` (holds 256, the same
 //! number of items as `Ring<u8, 256>`, but its index arithmetic becomes a modulo); and a plain
@@ -111,7 +111,7 @@ impl Fifo for ArrayRing {
 }
 
 /// regler's split halves, side by side (the firmware shape calls each half out of line).
-pub struct Halves<'a>(pub Filler<'a, u8>, pub Drainer<'a, u8>);
+pub struct Halves<'a>(pub Filler<'a, u8, SLOTS>, pub Drainer<'a, u8, SLOTS>);
 
 impl Fifo for Halves<'_> {
     #[inline(always)]

@@ -31,7 +31,7 @@ pub fn ring_pointer_rule() -> Outcome {
 pub fn split_halves_from_a_static() -> Outcome {
     // Firmware keeps the ring in a static and hands the halves to the link interrupt and the
     // machine loop; cortex-m's singleton gives the `&'static mut` once.
-    let shared = cortex_m::singleton!(: SharedRing<u8, 65> = SharedRing::new()).ok_or("twice")?;
+    let shared = cortex_m::singleton!(: SharedRing<u8, 64> = SharedRing::new()).ok_or("twice")?;
     let (mut filler, mut drainer) = shared.split();
     let (mut sent, mut got) = (0u32, 0u32);
     for round in 0..1000u32 {

@@ -25,4 +25,4 @@ pub use ring::{Counters, Item, Ring, Stats};
 pub use slave::{
     FrameError, MAX_DRIFT, Mode, Output, Slave, SlaveConfig, SlaveConfigError, SlaveStats, Source,
 };
-pub use split::{Drainer, Filler, SharedRing};
+pub use split::{Drainer, Filler, SharedItem, SharedRing};
