@@ -742,4 +742,101 @@ mod tests {
         assert_eq!(c.held(), 0);
         assert_eq!(c.stats().demands, 1);
     }
+
+    /// Messages may follow each other without a gap byte: a command to this crate right after
+    /// one it answered, or right after the junk of one that broke, is answered too.
+    #[test]
+    fn a_command_right_after_one_it_took_is_answered() {
+        let mut c = synced(ControllerConfig {
+            address: 5,
+            demand_repeat: 0,
+        });
+        let mut crate_ = Crate::default();
+        let write = |data| {
+            encode(Message::Command {
+                crate_address: 5,
+                station: 1,
+                subaddress: 2,
+                function: 16,
+                data: Some(data),
+            })
+        };
+        let read = encode(Message::Command {
+            crate_address: 5,
+            station: 1,
+            subaddress: 2,
+            function: 0,
+            data: None,
+        });
+        // Answered, then straight on; broken (END in its text), its junk up to the next clean
+        // delimiter, then straight on.
+        let mut stream = write(0x11);
+        stream.extend(&read);
+        stream.extend(&read[..3]);
+        stream.extend([END, END]);
+        stream.extend(write(0x22));
+        stream.extend(&read);
+        let out = run(&mut c, &mut crate_, &stream);
+        assert_eq!(
+            crate_.cycles,
+            vec![
+                (1, 2, 16, Some(0x11)),
+                (1, 2, 0, None),
+                (1, 2, 16, Some(0x22)),
+                (1, 2, 0, None)
+            ]
+        );
+        let replies: Vec<_> = messages(&out)
+            .iter()
+            .filter_map(|m| decode(m).ok())
+            .collect();
+        let reply = |derr, data: Option<u32>| Message::Reply {
+            crate_address: 5,
+            status: Status {
+                x: true,
+                q: data.is_some(),
+                derr,
+                ..Status::default()
+            },
+            data,
+        };
+        assert_eq!(
+            replies,
+            vec![
+                reply(false, None),
+                reply(false, Some(0x11)),
+                reply(true, None),
+                reply(false, Some(0x22))
+            ]
+        );
+        assert_eq!(c.stats().commands, 5);
+        assert_eq!(c.stats().executed, 4);
+        assert_eq!(c.stats().truncated, 1);
+    }
+
+    /// A delimiter other than WAIT between messages is a break: junk up to the next clean
+    /// delimiter, and only that far — the command after it is answered.
+    #[test]
+    fn a_stray_delimiter_between_messages_is_junk_up_to_the_next_clean_delimiter() {
+        let mut c = synced(ControllerConfig {
+            address: 5,
+            demand_repeat: 0,
+        });
+        let mut crate_ = Crate::default();
+        // ENDSUM (a clean delimiter, not WAIT), a header, END: junk, to be passed on as it is.
+        let junk = [endsum_byte(&[]), with_parity(9), END];
+        let mut stream = junk.to_vec();
+        stream.extend(encode(Message::Command {
+            crate_address: 5,
+            station: 1,
+            subaddress: 2,
+            function: 16,
+            data: Some(0x33),
+        }));
+        let out = run(&mut c, &mut crate_, &stream);
+        assert_eq!(&out[1..4], &junk[..]);
+        assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x33))]);
+        assert_eq!(c.stats().executed, 1);
+        assert_eq!(c.stats().passed, 0); // junk is no message
+    }
 }
