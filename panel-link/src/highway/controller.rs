@@ -839,4 +839,37 @@ mod tests {
         assert_eq!(c.stats().executed, 1);
         assert_eq!(c.stats().passed, 0); // junk is no message
     }
+
+    /// A message is at most `MAX_DECODE` (75) bytes: a command whose SPACE run goes on past that
+    /// is junk from its 76th byte, so the next clean delimiter — here a demand's ENDSUM, where a
+    /// command may not end — ends it, and the command after it is answered.
+    #[test]
+    fn a_space_run_past_the_longest_message_is_junk_up_to_the_next_clean_delimiter() {
+        let mut c = synced(ControllerConfig {
+            address: 5,
+            demand_repeat: 0,
+        });
+        let mut crate_ = Crate::default();
+        let other = encode(Message::Command {
+            crate_address: 9,
+            station: 1,
+            subaddress: 2,
+            function: 0,
+            data: None,
+        });
+        // 4 text bytes, SUM and 71 SPACE: 76 bytes without a delimiter.
+        let mut stream = other[..5].to_vec();
+        stream.extend([SPACE; 71]);
+        stream.push(endsum_byte(&[]));
+        stream.extend(encode(Message::Command {
+            crate_address: 5,
+            station: 1,
+            subaddress: 2,
+            function: 16,
+            data: Some(0x44),
+        }));
+        run(&mut c, &mut crate_, &stream);
+        assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x44))]);
+        assert_eq!(c.stats().passed, 1);
+    }
 }
