@@ -872,4 +872,40 @@ mod tests {
         assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x44))]);
         assert_eq!(c.stats().passed, 1);
     }
+
+    /// A command to another crate cut short by END (before its SPACE run) is broken: the stream
+    /// is junk up to the next clean delimiter after that END, so a message following without a
+    /// gap — which may be the damaged command's own tail — is not taken; after a gap it is.
+    #[test]
+    fn an_end_inside_another_crates_command_makes_junk_up_to_the_next_clean_delimiter() {
+        let mut c = synced(ControllerConfig {
+            address: 5,
+            demand_repeat: 0,
+        });
+        let mut crate_ = Crate::default();
+        let other = encode(Message::Command {
+            crate_address: 9,
+            station: 1,
+            subaddress: 2,
+            function: 0,
+            data: None,
+        });
+        let ours = encode(Message::Command {
+            crate_address: 5,
+            station: 1,
+            subaddress: 2,
+            function: 16,
+            data: Some(0x55),
+        });
+        // 4 text bytes, SUM, 2 SPACE and END: 9 SPACE short.
+        let mut stream = other[..7].to_vec();
+        stream.push(END);
+        stream.extend(&ours);
+        run(&mut c, &mut crate_, &stream);
+        assert_eq!(crate_.cycles, vec![]);
+        assert_eq!(c.stats().commands, 0);
+        // The END of the junk ends it: the same command again, after a gap, is answered.
+        run(&mut c, &mut crate_, &ours);
+        assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x55))]);
+    }
 }
