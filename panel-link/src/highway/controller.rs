@@ -908,4 +908,35 @@ mod tests {
         run(&mut c, &mut crate_, &ours);
         assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x55))]);
     }
+
+    /// A byte other than SPACE after another crate's command's SUM is a break: junk from there,
+    /// so the next clean delimiter — here a demand's ENDSUM, where a command may not end — ends
+    /// it, and the command after it is answered.
+    #[test]
+    fn a_text_byte_in_another_crates_reply_room_is_a_break() {
+        let mut c = synced(ControllerConfig {
+            address: 5,
+            demand_repeat: 0,
+        });
+        let mut crate_ = Crate::default();
+        let other = encode(Message::Command {
+            crate_address: 9,
+            station: 1,
+            subaddress: 2,
+            function: 0,
+            data: None,
+        });
+        // 4 text bytes, SUM, 2 SPACE, a text byte that is not SPACE, ENDSUM.
+        let mut stream = other[..7].to_vec();
+        stream.extend([with_parity(1), endsum_byte(&[])]);
+        stream.extend(encode(Message::Command {
+            crate_address: 5,
+            station: 1,
+            subaddress: 2,
+            function: 16,
+            data: Some(0x66),
+        }));
+        run(&mut c, &mut crate_, &stream);
+        assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x66))]);
+    }
 }
