@@ -939,4 +939,32 @@ mod tests {
         run(&mut c, &mut crate_, &stream);
         assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x66))]);
     }
+
+    /// A reply longer than 7 bytes breaks at its 7th byte (where ENDSUM belongs): junk from
+    /// there, so its ENDSUM ends the junk and the command right after it is answered.
+    #[test]
+    fn a_reply_one_byte_too_long_is_junk_up_to_its_endsum() {
+        let mut c = synced(ControllerConfig {
+            address: 5,
+            demand_repeat: 0,
+        });
+        let mut crate_ = Crate::default();
+        let reply = encode(Message::Reply {
+            crate_address: 9,
+            status: Status::default(),
+            data: Some(0x77),
+        });
+        // Header, status, 4 data bytes, one more text byte, ENDSUM.
+        let mut stream = reply[..6].to_vec();
+        stream.extend([with_parity(1), endsum_byte(&[])]);
+        stream.extend(encode(Message::Command {
+            crate_address: 5,
+            station: 1,
+            subaddress: 2,
+            function: 16,
+            data: Some(0x77),
+        }));
+        run(&mut c, &mut crate_, &stream);
+        assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x77))]);
+    }
 }
