@@ -595,4 +595,31 @@ mod tests {
             ]
         );
     }
+
+    /// The adapters' error messages in full: the port's own error, a closed stream, and the note
+    /// that the driver's event of that clock comes back with the error.
+    #[test]
+    fn error_messages_name_what_was_wrong() {
+        assert_eq!(
+            IoError::Port("overrun").to_string(),
+            "serial port error: \"overrun\""
+        );
+        assert_eq!(IoError::<()>::Closed.to_string(), "serial stream closed");
+        let without = DriverClockError::<()> {
+            error: IoError::Closed,
+            event: None,
+        };
+        assert_eq!(without.to_string(), "serial stream closed");
+        let with = DriverClockError::<()> {
+            error: IoError::Closed,
+            event: Some(DriverEvent::Demand {
+                crate_address: 3,
+                sgl: 1,
+            }),
+        };
+        assert_eq!(
+            with.to_string(),
+            "serial stream closed (the driver's event of that clock is handed back with the error)"
+        );
+    }
 }
