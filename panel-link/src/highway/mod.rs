@@ -377,7 +377,7 @@ pub enum DecodeError {
         /// Bytes given.
         len: usize,
     },
-    /// More bytes than any message has (a command's SPACE run is limited to 64).
+    /// More bytes than [`MAX_DECODE`] (75), the longest message `decode` takes.
     TooLong {
         /// Bytes given.
         len: usize,
