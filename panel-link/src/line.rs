@@ -364,6 +364,29 @@ mod tests {
         assert_eq!(&got[got.len() - 2..], &[Ok(0x22), Ok(0x33)]);
     }
 
+    /// `busy` is true from a frame's start bit until its last bit, and false on the idle line
+    /// before and after it.
+    #[test]
+    fn busy_while_a_frame_is_gathered() {
+        for framing in [Framing::BIT_SERIAL, Framing::PANEL] {
+            let mut rx = BitReceiver::new(framing);
+            assert!(!rx.busy());
+            assert_eq!(rx.bit(true), None);
+            assert!(!rx.busy());
+            let frame = framing.encode(0x5A);
+            for k in 0..framing.bits() {
+                let got = rx.bit((frame >> k) & 1 == 1);
+                if k + 1 < framing.bits() {
+                    assert_eq!(got, None);
+                    assert!(rx.busy(), "{framing:?} bit {k}");
+                } else {
+                    assert_eq!(got, Some(Ok(0x5A)));
+                    assert!(!rx.busy());
+                }
+            }
+        }
+    }
+
     #[test]
     #[cfg_attr(
         miri,
