@@ -236,6 +236,24 @@ proptest! {
         prop_assert_eq!(decode(&bytes), Ok(m));
     }
 
+    /// Any command cut short (its first `k` bytes, then END) is refused with a length a command
+    /// has: the length its function needs once SF and SN are there, before that the shortest
+    /// command's (11); a cut after the header alone is `Truncated`.
+    #[test]
+    fn a_cut_command_is_refused_with_a_length_a_command_has(m in command(), k in 1usize..15) {
+        let bytes = encode(&m);
+        let n = bytes.len();
+        let k = k.min(n - 2).max(1);
+        let mut cut = bytes[..k].to_vec();
+        cut.push(0xE0); // END
+        let want = match k + 1 {
+            2 => Err(DecodeError::Truncated { crate_address: m.crate_address() }),
+            got @ 3..=4 => Err(DecodeError::Length { expected: 11, got }),
+            got => Err(DecodeError::Length { expected: n, got }),
+        };
+        prop_assert_eq!(decode(&cut), want);
+    }
+
     /// Item 4: a reply or demand from crate 0 or 63, or a demand with SGL 0, is not a message:
     /// `encode` refuses to make one, and its bytes (row parity, delimiter and column sum all
     /// right) `decode` to the rule it breaks.
