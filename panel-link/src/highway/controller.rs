@@ -721,13 +721,18 @@ mod tests {
         stream.extend(&passing); // back to back: no gap
         crate_.lam = 0;
         let mut out = Vec::new();
+        let mut max_held = 0;
         for (k, &b) in stream.iter().chain(&[WAIT; 10]).enumerate() {
             if k == 3 {
                 crate_.lam = 4; // LAM raised in the middle of a passing message
             }
             out.push(c.clock(b, &mut crate_));
             assert!(c.held() <= 3);
+            max_held = max_held.max(c.held());
         }
+        // The demand went out right after the first message's ENDSUM: its three bytes were
+        // held, and the second message behind them.
+        assert_eq!(max_held, 3);
         let found = messages(&out);
         assert_eq!(found.len(), 3, "{out:x?}");
         assert_eq!(found[0], passing);
@@ -966,5 +971,28 @@ mod tests {
         }));
         run(&mut c, &mut crate_, &stream);
         assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x77))]);
+    }
+
+    /// A dataway that does not report a graded LAM (the trait's default) makes no demand.
+    #[test]
+    fn a_dataway_without_graded_lam_makes_no_demand() {
+        struct Plain;
+        impl Dataway for Plain {
+            fn cycle(&mut self, _: u8, _: u8, _: u8, _: Option<u32>) -> Cycle {
+                Cycle {
+                    read: 0,
+                    x: true,
+                    q: true,
+                }
+            }
+        }
+        let mut c = Controller::new(ControllerConfig {
+            address: 5,
+            demand_repeat: 1,
+        })
+        .unwrap();
+        let out: Vec<u8> = (0..50).map(|_| c.clock(WAIT, &mut Plain)).collect();
+        assert_eq!(out, vec![WAIT; 50]);
+        assert_eq!(c.stats().demands, 0);
     }
 }
