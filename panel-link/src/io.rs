@@ -387,6 +387,12 @@ mod tests {
         fn write(&mut self, buf: &[u8]) -> Result<usize, Broken> {
             self.writes = self.writes.saturating_add(1);
             if self.writes > self.fail_from {
+                // The application stops at the first error: a second failing write is a port
+                // error retried (a test that fails rather than hangs).
+                assert!(
+                    self.writes <= self.fail_from.saturating_add(1),
+                    "write_byte retried a port error"
+                );
                 return Err(Broken);
             }
             if let Some(&b) = buf.first() {
