@@ -395,6 +395,19 @@ mod tests {
         }
     }
 
+    /// "Exact": a bit flips when its 64-bit draw is below the threshold `rate · 2⁶⁴`, not at
+    /// it. The seeds were searched (with an independent model of `corrupt`) so that a draw equals
+    /// a threshold exactly, with `rate` = that draw / 2⁶⁴: for seed 3051 the first draw equals
+    /// the one-bit threshold (the first flip is bit 1, not bit 0), for seed 924 the draw of bit 5
+    /// equals it (bit 5 stays).
+    #[test]
+    fn a_bit_flips_only_when_its_draw_is_below_the_threshold() {
+        let mut a = Noise::new(0.310_664_905_841_757_9, 3051).unwrap();
+        assert_eq!(a.corrupt(0, 16), 0xc202);
+        let mut b = Noise::new(0.110_695_015_145_015_56, 924).unwrap();
+        assert_eq!(b.corrupt(0, 16), 0x54);
+    }
+
     /// `busy` is true from a frame's start bit until its last bit, and false on the idle line
     /// before and after it.
     #[test]
