@@ -408,6 +408,23 @@ mod tests {
         assert_eq!(b.corrupt(0, 16), 0x54);
     }
 
+    /// `corrupt` flips bits: a 1 hit becomes 0, as a 0 hit becomes 1 — with the same seed, the
+    /// bits changed in an all-ones word are those set in an all-zeros one.
+    #[test]
+    fn corrupt_flips_ones_as_well_as_zeros() {
+        for seed in 0..50 {
+            let mut zeros = Noise::new(0.25, seed).unwrap();
+            let mut ones = Noise::new(0.25, seed).unwrap();
+            for _ in 0..20 {
+                let hit = zeros.corrupt(0, 11);
+                assert_eq!(ones.corrupt(0x07FF, 11), 0x07FF ^ hit, "seed {seed}");
+                assert_eq!(ones.corrupt_byte(0xFF), 0xFF ^ zeros.corrupt_byte(0));
+            }
+            assert_eq!(ones.flips(), zeros.flips());
+            assert!(zeros.flips() > 0);
+        }
+    }
+
     /// `busy` is true from a frame's start bit until its last bit, and false on the idle line
     /// before and after it.
     #[test]
