@@ -387,6 +387,12 @@ mod tests {
         fn write(&mut self, buf: &[u8]) -> Result<usize, Broken> {
             self.writes = self.writes.saturating_add(1);
             if self.writes > self.fail_from {
+                // The application stops at the first error: a second failing write is a port
+                // error retried (a test that fails rather than hangs).
+                assert!(
+                    self.writes <= self.fail_from.saturating_add(1),
+                    "write_byte retried a port error"
+                );
                 return Err(Broken);
             }
             if let Some(&b) = buf.first() {
@@ -593,6 +599,33 @@ mod tests {
                 Some(0),
                 Some(0)
             ]
+        );
+    }
+
+    /// The adapters' error messages in full: the port's own error, a closed stream, and the note
+    /// that the driver's event of that clock comes back with the error.
+    #[test]
+    fn error_messages_name_what_was_wrong() {
+        assert_eq!(
+            IoError::Port("overrun").to_string(),
+            "serial port error: \"overrun\""
+        );
+        assert_eq!(IoError::<()>::Closed.to_string(), "serial stream closed");
+        let without = DriverClockError::<()> {
+            error: IoError::Closed,
+            event: None,
+        };
+        assert_eq!(without.to_string(), "serial stream closed");
+        let with = DriverClockError::<()> {
+            error: IoError::Closed,
+            event: Some(DriverEvent::Demand {
+                crate_address: 3,
+                sgl: 1,
+            }),
+        };
+        assert_eq!(
+            with.to_string(),
+            "serial stream closed (the driver's event of that clock is handed back with the error)"
         );
     }
 }

@@ -364,6 +364,90 @@ mod tests {
         assert_eq!(&got[got.len() - 2..], &[Ok(0x22), Ok(0x33)]);
     }
 
+    /// The generator is SplitMix64 (as documented), so a simulation's bit errors are the same
+    /// on every platform and release: `next_u64` continues SplitMix64 from the state that
+    /// SplitMix64 gave for `seed ^ 0x6A09_E667_F3BC_C909`. The values come from an independent
+    /// implementation of Vigna's `splitmix64.c` (which gives 6457827717110365317 first for
+    /// seed 1234567).
+    #[test]
+    fn the_generator_is_splitmix64() {
+        for (seed, want) in [
+            (
+                0,
+                [
+                    0x96dc_b1d7_126a_6eba,
+                    0x2f8e_32a8_9316_a664,
+                    0xcdae_b481_a133_5c34,
+                ],
+            ),
+            (
+                1_234_567,
+                [
+                    0x851b_971e_78b4_0b4a,
+                    0x4456_d04c_dc3a_4c6f,
+                    0x6d4a_27d7_a279_131e,
+                ],
+            ),
+        ] {
+            let mut noise = Noise::new(0.25, seed).unwrap();
+            let got = [noise.next_u64(), noise.next_u64(), noise.next_u64()];
+            assert_eq!(got, want, "seed {seed}");
+        }
+    }
+
+    /// "Exact": a bit flips when its 64-bit draw is below the threshold `rate · 2⁶⁴`, not at
+    /// it. The seeds were searched (with an independent model of `corrupt`) so that a draw equals
+    /// a threshold exactly, with `rate` = that draw / 2⁶⁴: for seed 3051 the first draw equals
+    /// the one-bit threshold (the first flip is bit 1, not bit 0), for seed 924 the draw of bit 5
+    /// equals it (bit 5 stays).
+    #[test]
+    fn a_bit_flips_only_when_its_draw_is_below_the_threshold() {
+        let mut a = Noise::new(0.310_664_905_841_757_9, 3051).unwrap();
+        assert_eq!(a.corrupt(0, 16), 0xc202);
+        let mut b = Noise::new(0.110_695_015_145_015_56, 924).unwrap();
+        assert_eq!(b.corrupt(0, 16), 0x54);
+    }
+
+    /// `corrupt` flips bits: a 1 hit becomes 0, as a 0 hit becomes 1 — with the same seed, the
+    /// bits changed in an all-ones word are those set in an all-zeros one.
+    #[test]
+    fn corrupt_flips_ones_as_well_as_zeros() {
+        for seed in 0..50 {
+            let mut zeros = Noise::new(0.25, seed).unwrap();
+            let mut ones = Noise::new(0.25, seed).unwrap();
+            for _ in 0..20 {
+                let hit = zeros.corrupt(0, 11);
+                assert_eq!(ones.corrupt(0x07FF, 11), 0x07FF ^ hit, "seed {seed}");
+                assert_eq!(ones.corrupt_byte(0xFF), 0xFF ^ zeros.corrupt_byte(0));
+            }
+            assert_eq!(ones.flips(), zeros.flips());
+            assert!(zeros.flips() > 0);
+        }
+    }
+
+    /// `busy` is true from a frame's start bit until its last bit, and false on the idle line
+    /// before and after it.
+    #[test]
+    fn busy_while_a_frame_is_gathered() {
+        for framing in [Framing::BIT_SERIAL, Framing::PANEL] {
+            let mut rx = BitReceiver::new(framing);
+            assert!(!rx.busy());
+            assert_eq!(rx.bit(true), None);
+            assert!(!rx.busy());
+            let frame = framing.encode(0x5A);
+            for k in 0..framing.bits() {
+                let got = rx.bit((frame >> k) & 1 == 1);
+                if k + 1 < framing.bits() {
+                    assert_eq!(got, None);
+                    assert!(rx.busy(), "{framing:?} bit {k}");
+                } else {
+                    assert_eq!(got, Some(Ok(0x5A)));
+                    assert!(!rx.busy());
+                }
+            }
+        }
+    }
+
     #[test]
     #[cfg_attr(
         miri,

@@ -236,6 +236,24 @@ proptest! {
         prop_assert_eq!(decode(&bytes), Ok(m));
     }
 
+    /// Any command cut short (its first `k` bytes, then END) is refused with a length a command
+    /// has: the length its function needs once SF and SN are there, before that the shortest
+    /// command's (11); a cut after the header alone is `Truncated`.
+    #[test]
+    fn a_cut_command_is_refused_with_a_length_a_command_has(m in command(), k in 1usize..15) {
+        let bytes = encode(&m);
+        let n = bytes.len();
+        let k = k.min(n - 2).max(1);
+        let mut cut = bytes[..k].to_vec();
+        cut.push(0xE0); // END
+        let want = match k + 1 {
+            2 => Err(DecodeError::Truncated { crate_address: m.crate_address() }),
+            got @ 3..=4 => Err(DecodeError::Length { expected: 11, got }),
+            got => Err(DecodeError::Length { expected: n, got }),
+        };
+        prop_assert_eq!(decode(&cut), want);
+    }
+
     /// Item 4: a reply or demand from crate 0 or 63, or a demand with SGL 0, is not a message:
     /// `encode` refuses to make one, and its bytes (row parity, delimiter and column sum all
     /// right) `decode` to the rule it breaks.
@@ -1682,7 +1700,10 @@ mod io_never_loses_a_byte {
         let mut events = Vec::new();
         for _ in 0..calls {
             let event = match clock_driver(&mut port, &mut driver, &mut link) {
-                Ok(event) => event,
+                Ok(event) => {
+                    assert!(!link.interrupted());
+                    event
+                }
                 Err(e) => {
                     assert!(matches!(e.error, IoError::Port(Broken) | IoError::Closed));
                     assert!(link.interrupted());
@@ -1789,6 +1810,7 @@ mod io_never_loses_a_byte {
         };
         let (mut c, mut d) = fresh();
         let model: Vec<u8> = stream.iter().map(|&b| c.clock(b, &mut d)).collect();
+        let mut owed = 0;
         for kind in 0..2 {
             for fail_at in 1..=2 * stream.len() as u32 + 2 {
                 let (mut c9, mut crate9) = fresh();
@@ -1804,7 +1826,20 @@ mod io_never_loses_a_byte {
                 };
                 let mut link = ControllerLink::default();
                 for _ in 0..stream.len() + 1 {
-                    let _ = clock_controller(&mut port, &mut c9, &mut crate9, &mut link);
+                    match clock_controller(&mut port, &mut c9, &mut crate9, &mut link) {
+                        Ok(()) => assert_eq!(link.unsent(), None, "{kind}/{fail_at}"),
+                        // A failed write owes the loop the byte the controller gave (past
+                        // the stream's end the port gives WAIT: the controller's bytes then are
+                        // not in the model).
+                        Err(_) => {
+                            if let Some(byte) = link.unsent() {
+                                if let Some(&want) = model.get(port.out.len()) {
+                                    assert_eq!(byte, want, "{kind}/{fail_at}");
+                                    owed += 1;
+                                }
+                            }
+                        }
+                    }
                 }
                 let n = port.out.len().min(model.len());
                 assert_eq!(port.out[..n], model[..n], "{kind}/{fail_at}");
@@ -1825,6 +1860,7 @@ mod io_never_loses_a_byte {
                 assert_eq!(crate5.cycles, [fields(&sent)], "{kind}/{fail_at}");
             }
         }
+        assert!(owed > 0, "no write failed");
     }
 }
 

@@ -721,13 +721,18 @@ mod tests {
         stream.extend(&passing); // back to back: no gap
         crate_.lam = 0;
         let mut out = Vec::new();
+        let mut max_held = 0;
         for (k, &b) in stream.iter().chain(&[WAIT; 10]).enumerate() {
             if k == 3 {
                 crate_.lam = 4; // LAM raised in the middle of a passing message
             }
             out.push(c.clock(b, &mut crate_));
             assert!(c.held() <= 3);
+            max_held = max_held.max(c.held());
         }
+        // The demand went out right after the first message's ENDSUM: its three bytes were
+        // held, and the second message behind them.
+        assert_eq!(max_held, 3);
         let found = messages(&out);
         assert_eq!(found.len(), 3, "{out:x?}");
         assert_eq!(found[0], passing);
@@ -741,5 +746,253 @@ mod tests {
         assert_eq!(found[2], passing);
         assert_eq!(c.held(), 0);
         assert_eq!(c.stats().demands, 1);
+    }
+
+    /// Messages may follow each other without a gap byte: a command to this crate right after
+    /// one it answered, or right after the junk of one that broke, is answered too.
+    #[test]
+    fn a_command_right_after_one_it_took_is_answered() {
+        let mut c = synced(ControllerConfig {
+            address: 5,
+            demand_repeat: 0,
+        });
+        let mut crate_ = Crate::default();
+        let write = |data| {
+            encode(Message::Command {
+                crate_address: 5,
+                station: 1,
+                subaddress: 2,
+                function: 16,
+                data: Some(data),
+            })
+        };
+        let read = encode(Message::Command {
+            crate_address: 5,
+            station: 1,
+            subaddress: 2,
+            function: 0,
+            data: None,
+        });
+        // Answered, then straight on; broken (END in its text), its junk up to the next clean
+        // delimiter, then straight on.
+        let mut stream = write(0x11);
+        stream.extend(&read);
+        stream.extend(&read[..3]);
+        stream.extend([END, END]);
+        stream.extend(write(0x22));
+        stream.extend(&read);
+        let out = run(&mut c, &mut crate_, &stream);
+        assert_eq!(
+            crate_.cycles,
+            vec![
+                (1, 2, 16, Some(0x11)),
+                (1, 2, 0, None),
+                (1, 2, 16, Some(0x22)),
+                (1, 2, 0, None)
+            ]
+        );
+        let replies: Vec<_> = messages(&out)
+            .iter()
+            .filter_map(|m| decode(m).ok())
+            .collect();
+        let reply = |derr, data: Option<u32>| Message::Reply {
+            crate_address: 5,
+            status: Status {
+                x: true,
+                q: data.is_some(),
+                derr,
+                ..Status::default()
+            },
+            data,
+        };
+        assert_eq!(
+            replies,
+            vec![
+                reply(false, None),
+                reply(false, Some(0x11)),
+                reply(true, None),
+                reply(false, Some(0x22))
+            ]
+        );
+        assert_eq!(c.stats().commands, 5);
+        assert_eq!(c.stats().executed, 4);
+        assert_eq!(c.stats().truncated, 1);
+    }
+
+    /// A delimiter other than WAIT between messages is a break: junk up to the next clean
+    /// delimiter, and only that far — the command after it is answered.
+    #[test]
+    fn a_stray_delimiter_between_messages_is_junk_up_to_the_next_clean_delimiter() {
+        let mut c = synced(ControllerConfig {
+            address: 5,
+            demand_repeat: 0,
+        });
+        let mut crate_ = Crate::default();
+        // ENDSUM (a clean delimiter, not WAIT), a header, END: junk, to be passed on as it is.
+        let junk = [endsum_byte(&[]), with_parity(9), END];
+        let mut stream = junk.to_vec();
+        stream.extend(encode(Message::Command {
+            crate_address: 5,
+            station: 1,
+            subaddress: 2,
+            function: 16,
+            data: Some(0x33),
+        }));
+        let out = run(&mut c, &mut crate_, &stream);
+        assert_eq!(&out[1..4], &junk[..]);
+        assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x33))]);
+        assert_eq!(c.stats().executed, 1);
+        assert_eq!(c.stats().passed, 0); // junk is no message
+    }
+
+    /// A message is at most `MAX_DECODE` (75) bytes: a command whose SPACE run goes on past that
+    /// is junk from its 76th byte, so the next clean delimiter — here a demand's ENDSUM, where a
+    /// command may not end — ends it, and the command after it is answered.
+    #[test]
+    fn a_space_run_past_the_longest_message_is_junk_up_to_the_next_clean_delimiter() {
+        let mut c = synced(ControllerConfig {
+            address: 5,
+            demand_repeat: 0,
+        });
+        let mut crate_ = Crate::default();
+        let other = encode(Message::Command {
+            crate_address: 9,
+            station: 1,
+            subaddress: 2,
+            function: 0,
+            data: None,
+        });
+        // 4 text bytes, SUM and 71 SPACE: 76 bytes without a delimiter.
+        let mut stream = other[..5].to_vec();
+        stream.extend([SPACE; 71]);
+        stream.push(endsum_byte(&[]));
+        stream.extend(encode(Message::Command {
+            crate_address: 5,
+            station: 1,
+            subaddress: 2,
+            function: 16,
+            data: Some(0x44),
+        }));
+        run(&mut c, &mut crate_, &stream);
+        assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x44))]);
+        assert_eq!(c.stats().passed, 1);
+    }
+
+    /// A command to another crate cut short by END (before its SPACE run) is broken: the stream
+    /// is junk up to the next clean delimiter after that END, so a message following without a
+    /// gap — which may be the damaged command's own tail — is not taken; after a gap it is.
+    #[test]
+    fn an_end_inside_another_crates_command_makes_junk_up_to_the_next_clean_delimiter() {
+        let mut c = synced(ControllerConfig {
+            address: 5,
+            demand_repeat: 0,
+        });
+        let mut crate_ = Crate::default();
+        let other = encode(Message::Command {
+            crate_address: 9,
+            station: 1,
+            subaddress: 2,
+            function: 0,
+            data: None,
+        });
+        let ours = encode(Message::Command {
+            crate_address: 5,
+            station: 1,
+            subaddress: 2,
+            function: 16,
+            data: Some(0x55),
+        });
+        // 4 text bytes, SUM, 2 SPACE and END: 9 SPACE short.
+        let mut stream = other[..7].to_vec();
+        stream.push(END);
+        stream.extend(&ours);
+        run(&mut c, &mut crate_, &stream);
+        assert_eq!(crate_.cycles, vec![]);
+        assert_eq!(c.stats().commands, 0);
+        // The END of the junk ends it: the same command again, after a gap, is answered.
+        run(&mut c, &mut crate_, &ours);
+        assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x55))]);
+    }
+
+    /// A byte other than SPACE after another crate's command's SUM is a break: junk from there,
+    /// so the next clean delimiter — here a demand's ENDSUM, where a command may not end — ends
+    /// it, and the command after it is answered.
+    #[test]
+    fn a_text_byte_in_another_crates_reply_room_is_a_break() {
+        let mut c = synced(ControllerConfig {
+            address: 5,
+            demand_repeat: 0,
+        });
+        let mut crate_ = Crate::default();
+        let other = encode(Message::Command {
+            crate_address: 9,
+            station: 1,
+            subaddress: 2,
+            function: 0,
+            data: None,
+        });
+        // 4 text bytes, SUM, 2 SPACE, a text byte that is not SPACE, ENDSUM.
+        let mut stream = other[..7].to_vec();
+        stream.extend([with_parity(1), endsum_byte(&[])]);
+        stream.extend(encode(Message::Command {
+            crate_address: 5,
+            station: 1,
+            subaddress: 2,
+            function: 16,
+            data: Some(0x66),
+        }));
+        run(&mut c, &mut crate_, &stream);
+        assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x66))]);
+    }
+
+    /// A reply longer than 7 bytes breaks at its 7th byte (where ENDSUM belongs): junk from
+    /// there, so its ENDSUM ends the junk and the command right after it is answered.
+    #[test]
+    fn a_reply_one_byte_too_long_is_junk_up_to_its_endsum() {
+        let mut c = synced(ControllerConfig {
+            address: 5,
+            demand_repeat: 0,
+        });
+        let mut crate_ = Crate::default();
+        let reply = encode(Message::Reply {
+            crate_address: 9,
+            status: Status::default(),
+            data: Some(0x77),
+        });
+        // Header, status, 4 data bytes, one more text byte, ENDSUM.
+        let mut stream = reply[..6].to_vec();
+        stream.extend([with_parity(1), endsum_byte(&[])]);
+        stream.extend(encode(Message::Command {
+            crate_address: 5,
+            station: 1,
+            subaddress: 2,
+            function: 16,
+            data: Some(0x77),
+        }));
+        run(&mut c, &mut crate_, &stream);
+        assert_eq!(crate_.cycles, vec![(1, 2, 16, Some(0x77))]);
+    }
+
+    /// A dataway that does not report a graded LAM (the trait's default) makes no demand.
+    #[test]
+    fn a_dataway_without_graded_lam_makes_no_demand() {
+        struct Plain;
+        impl Dataway for Plain {
+            fn cycle(&mut self, _: u8, _: u8, _: u8, _: Option<u32>) -> Cycle {
+                Cycle {
+                    read: 0,
+                    x: true,
+                    q: true,
+                }
+            }
+        }
+        let mut c = Controller::new(ControllerConfig {
+            address: 5,
+            demand_repeat: 1,
+        })
+        .unwrap();
+        let out: Vec<u8> = (0..50).map(|_| c.clock(WAIT, &mut Plain)).collect();
+        assert_eq!(out, vec![WAIT; 50]);
+        assert_eq!(c.stats().demands, 0);
     }
 }

@@ -760,4 +760,55 @@ mod tests {
             "an ERR-noted attempt is not a time-out"
         );
     }
+
+    /// A command to a crate that is not on the loop comes back round unanswered: the driver
+    /// retries it and then reports it failed with `NoResponse` (not a time-out, not garbled).
+    #[test]
+    fn a_command_to_a_crate_not_on_the_loop_fails_with_no_response() {
+        let config = DriverConfig {
+            retries: 2,
+            ..DriverConfig::for_loop(2)
+        };
+        let mut d: Driver<1> = Driver::new(config).unwrap();
+        let mut crates: std::vec::Vec<Controller> = (1..=2)
+            .map(|a| {
+                Controller::new(ControllerConfig {
+                    address: a,
+                    demand_repeat: 0,
+                })
+                .unwrap()
+            })
+            .collect();
+        let cmd = Message::Command {
+            crate_address: 7,
+            station: 1,
+            subaddress: 0,
+            function: 16,
+            data: Some(9),
+        };
+        let tag = d.submit(cmd).unwrap();
+        let mut line = WAIT;
+        let mut events = std::vec::Vec::new();
+        for _ in 0..400 {
+            let step = d.clock(line);
+            line = crates
+                .iter_mut()
+                .fold(step.transmit, |b, c| c.clock(b, &mut Echo));
+            events.extend(step.event);
+        }
+        assert_eq!(
+            events,
+            std::vec![DriverEvent::Failed {
+                tag,
+                command: cmd,
+                failure: Failure::NoResponse
+            }]
+        );
+        let stats = d.stats();
+        assert_eq!((stats.sent, stats.retries, stats.failed), (3, 2, 1));
+        assert_eq!(
+            (stats.no_response, stats.garbled, stats.timeouts),
+            (3, 0, 0)
+        );
+    }
 }

@@ -377,7 +377,7 @@ pub enum DecodeError {
         /// Bytes given.
         len: usize,
     },
-    /// More bytes than any message has (a command's SPACE run is limited to 64).
+    /// More bytes than [`MAX_DECODE`] (75), the longest message `decode` takes.
     TooLong {
         /// Bytes given.
         len: usize,
@@ -689,7 +689,12 @@ impl Message {
     }
 }
 
-/// The longest byte sequence [`decode`] considers (a command with 64 SPACE bytes).
+/// The shortest command: 4 text bytes, SUM, 2 guard SPACE, 3 SPACE for the reply, END (a
+/// function that neither reads nor writes).
+const SHORTEST_COMMAND: usize = 11;
+
+/// The longest byte sequence [`decode`] considers, 75 bytes: a write (8 text bytes and SUM) with
+/// 65 SPACE bytes and its END, a read or any other command with more SPACE.
 pub const MAX_DECODE: usize = 9 + 1 + 64 + 1;
 
 /// Decodes one message, from its header to its END or ENDSUM byte inclusive, checking every rule:
@@ -772,16 +777,17 @@ pub fn decode(bytes: &[u8]) -> Result<Message, DecodeError> {
             data,
         });
     }
-    // A command: header, SA, SF, SN, [data], SUM, SPACE…, END.
-    let subaddress = second & 0x0F;
-    let sf = field(2);
-    let sn = field(3);
-    if len < 9 {
+    // A command: header, SA, SF, SN, [data], SUM, SPACE…, END. Without SF and SN its function
+    // is unknown: the least of any command is what it needs.
+    if len < 5 {
         return Err(DecodeError::Length {
-            expected: 9,
+            expected: SHORTEST_COMMAND,
             got: len,
         });
     }
+    let subaddress = second & 0x0F;
+    let sf = field(2);
+    let sn = field(3);
     if sf & 0x20 != 0 {
         return Err(DecodeError::ReservedBit { index: 2 });
     }
@@ -1179,5 +1185,65 @@ mod tests {
                 got: 4
             })
         );
+    }
+
+    /// A command cut short (its first bytes, then END) is refused with the length its function
+    /// needs, and, where SF and SN are missing, the least of any command — never a length no
+    /// command has. Every function, every cut.
+    #[test]
+    fn a_cut_command_names_the_length_its_function_needs() {
+        let shortest = (0..=31)
+            .map(|function| command(function).encoded_len())
+            .min();
+        assert_eq!(shortest, Some(SHORTEST_COMMAND));
+        assert_eq!(SHORTEST_COMMAND, 11);
+        for function in 0..=31 {
+            let cmd = command(function);
+            let mut buf = [0u8; MAX_MESSAGE];
+            let n = cmd.encode(&mut buf).unwrap();
+            for k in 1..n {
+                let cut = [&buf[..k], &[END]].concat();
+                let want = match k + 1 {
+                    2 => Err(DecodeError::Truncated { crate_address: 4 }),
+                    got @ 3..=4 => Err(DecodeError::Length { expected: 11, got }),
+                    got if got < n => Err(DecodeError::Length { expected: n, got }),
+                    _ => Ok(cmd),
+                };
+                assert_eq!(decode(&cut), want, "F{function} cut after {k} bytes");
+            }
+        }
+    }
+
+    /// `decode` takes up to `MAX_DECODE` = 75 bytes: a write padded with SPACE to 75 bytes is a
+    /// message, one byte more is too long.
+    #[test]
+    fn decode_takes_a_command_of_75_bytes_and_no_longer() {
+        let write = Message::Command {
+            crate_address: 4,
+            station: 2,
+            subaddress: 1,
+            function: 16,
+            data: Some(0x12_3456),
+        };
+        let mut buf = [0u8; MAX_MESSAGE];
+        let n = write.encode(&mut buf).unwrap();
+        let text = &buf[..9]; // 8 text bytes and SUM
+        for len in [n, 74, 75] {
+            let padded = [text, &vec![SPACE; len - 10][..], &[END]].concat();
+            assert_eq!(decode(&padded), Ok(write), "{len} bytes");
+        }
+        let too_long = [text, &[SPACE; 66][..], &[END]].concat();
+        assert_eq!(decode(&too_long), Err(DecodeError::TooLong { len: 76 }));
+        assert_eq!(MAX_DECODE, 75);
+    }
+
+    fn command(function: u8) -> Message {
+        Message::Command {
+            crate_address: 4,
+            station: 2,
+            subaddress: 1,
+            function,
+            data: is_write(function).then_some(0x0ABC),
+        }
     }
 }
