@@ -825,7 +825,11 @@ mod tests {
             at += 10_000;
             m.on_report(0, 0, &report(at as u16, at as u16)).unwrap();
         }
-        while m.next_refill(0, 64).is_some() {}
+        // Everything owed is granted in a few grants (a master that kept granting fails here).
+        let grants = (0..100)
+            .take_while(|_| m.next_refill(0, 64).is_some())
+            .count();
+        assert!(grants < 100, "the master never stopped granting");
         assert!(m.status(0).unwrap().linked);
         let hello = Report {
             boot: 1,
