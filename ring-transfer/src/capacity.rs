@@ -339,8 +339,12 @@ fn check_by(
             None => return Ok(Verdict::RingTooShort { slave: i }),
         }
     }
-    // For display: the rounded-up sum is within n·2⁻⁶⁴ of the truth.
-    let ppm = u64::try_from(rounded_up.saturating_mul(1_000_000) >> 64).unwrap_or(u64::MAX);
+    // For display, rounded up: from the exact sum when it fits in 128 bits, else from the
+    // rounded-up sum (within n·2⁻⁶⁴ above the truth).
+    let ppm = exact
+        .and_then(|sum| Some(div_ceil(sum.num.checked_mul(1_000_000)?, sum.den)))
+        .unwrap_or_else(|| div_ceil(rounded_up.saturating_mul(1_000_000), 1 << 64));
+    let ppm = u64::try_from(ppm).unwrap_or(u64::MAX);
     // Exact when the sum of fractions fits in 128 bits, rounded up (safe) when it does not.
     let overloaded = exact.map_or(rounded_up > 1 << 64, |sum| sum.num > sum.den);
     if overloaded {
@@ -565,12 +569,13 @@ mod tests {
     #[test]
     fn demand_equal_to_the_interval_fits() {
         // At L = 19 the short-ringed slave's one item and the longest blocking (9) need exactly
-        // 19: the link just makes it (the test is demand ≤ L).
+        // 19: the link just makes it (the test is demand ≤ L). U = 1/100 + 10/19 = 0.5363157…,
+        // reported rounded up.
         let loads = [Load { t0: 1000, ring: 10 }, Load { t0: 19, ring: 2 }];
         assert_eq!(
             check(&loads, LINK),
             Ok(Verdict::Schedulable {
-                utilisation_ppm: 536_315
+                utilisation_ppm: 536_316
             })
         );
     }
@@ -592,7 +597,7 @@ mod tests {
                 utilisation_ppm: 1_000_000
             })
         );
-        // C = 2⁶³: U just below 2: overloaded.
+        // C = 2⁶³: U just below 2 (1.99999999…, reported rounded up): overloaded.
         let at_two = LinkSpec {
             item_time: 1 << 63,
             latency: 0,
@@ -600,7 +605,7 @@ mod tests {
         assert_eq!(
             check(&loads, at_two),
             Ok(Verdict::Overloaded {
-                utilisation_ppm: 1_999_999
+                utilisation_ppm: 2_000_000
             })
         );
     }

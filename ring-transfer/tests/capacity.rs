@@ -16,7 +16,7 @@ use std::time::{Duration, Instant};
 
 use promptly::promptly;
 use proptest::prelude::*;
-use regler_ring_transfer::capacity::{self, CapacityError, LinkSpec, Load};
+use regler_ring_transfer::capacity::{self, CapacityError, LinkSpec, Load, Verdict};
 
 fn schedulable(loads: &[Load], link: LinkSpec) -> Result<bool, CapacityError> {
     Ok(capacity::check(loads, link)?.is_schedulable())
@@ -66,6 +66,24 @@ proptest! {
         let shorter = schedulable(&with_ring(&loads, slave, ring), link).unwrap();
         let longer = schedulable(&with_ring(&loads, slave, ring + 1), link).unwrap();
         prop_assert!(!shorter || longer, "{:?} {:?} slave {} ring {}", loads, link, slave, ring);
+    }
+
+    /// The utilisation a verdict reports is Σ C/Tᵢ in parts per million, rounded up (it was
+    /// rounded down: 0.5363157… was reported as 536 315 ppm).
+    #[test]
+    fn the_utilisation_is_the_exact_sum_rounded_up((loads, link) in sets()) {
+        let (mut num, mut den) = (0u128, 1u128);
+        for l in &loads {
+            num = num * u128::from(l.t0) + u128::from(link.item_time) * den;
+            den *= u128::from(l.t0);
+        }
+        let want = (num * 1_000_000).div_ceil(den) as u64;
+        match capacity::check(&loads, link).unwrap() {
+            Verdict::Schedulable { utilisation_ppm } | Verdict::Overloaded { utilisation_ppm } => {
+                prop_assert_eq!(utilisation_ppm, want, "{:?} {:?}", loads, link);
+            }
+            _ => {}
+        }
     }
 
     /// The smallest ring in 2..=max_ring that passes `check`, found by scanning every ring.
