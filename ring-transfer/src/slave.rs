@@ -830,6 +830,51 @@ mod tests {
         assert_eq!(s.mode(), Mode::Linked);
     }
 
+    /// A refill that brings items restarts the count of steps to the next report (the board
+    /// heard from the master); one that brings none (a keep-alive, duplicates) does not.
+    #[test]
+    fn only_a_refill_that_brings_items_restarts_the_report_countdown() {
+        // Stand-alone, reports every `retry_after` = 3 steps when polled every step.
+        let stand_alone = || {
+            let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
+            let _ = s.poll_report();
+            refill(&mut s, 0, &[0, 1, 2, 3, 4, 5, 6, 7]).unwrap();
+            for _ in 0..20 {
+                s.step(|_, _| 0xEE);
+                let _ = s.poll_report();
+            }
+            assert_eq!(s.mode(), Mode::StandAlone);
+            // Just after a report, at the start of a row.
+            while !(s.position().1 == 0 && s.poll_report().is_some()) {
+                s.step(|_, _| 0xEE);
+            }
+            s
+        };
+        // Steps (polled after each) until the next report.
+        let next_report = |s: &mut Slave<8>| {
+            (1..=10)
+                .find(|_| {
+                    s.step(|_, _| 0xEE);
+                    s.poll_report().is_some()
+                })
+                .unwrap()
+        };
+        let mut s = stand_alone();
+        assert_eq!(next_report(&mut s), 3, "undisturbed");
+        // One step, then a refill with items: three more steps to the next report.
+        let mut s = stand_alone();
+        s.step(|_, _| 0xEE);
+        assert!(s.poll_report().is_none());
+        assert_eq!(refill(&mut s, 8, &[8, 9, 10]), Ok(3));
+        assert_eq!(next_report(&mut s), 3, "after a refill with items");
+        // One step, then a refill of items already held: the countdown goes on.
+        let mut s = stand_alone();
+        s.step(|_, _| 0xEE);
+        assert!(s.poll_report().is_none());
+        assert_eq!(refill(&mut s, 0, &[0, 1, 2]), Ok(0));
+        assert_eq!(next_report(&mut s), 2, "after a refill of duplicates");
+    }
+
     fn sync(s: &mut Slave<8>, first: u16, items: &[u8], boot: u8) -> Result<usize, FrameError> {
         let mut buf = [0; MAX_FRAME];
         let n = Refill {
