@@ -830,6 +830,22 @@ mod tests {
         assert_eq!(s.mode(), Mode::Linked);
     }
 
+    /// A report at once when the ring has a free slot and something was consumed since the
+    /// last one; none while the ring is full, none again before the next consumption.
+    #[test]
+    fn a_report_when_a_slot_is_free_and_something_was_consumed() {
+        let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
+        assert!(s.poll_report().unwrap().hello);
+        assert_eq!(refill(&mut s, 0, &[0, 1, 2, 3, 4, 5, 6, 7]), Ok(8));
+        assert_eq!(s.poll_report(), None, "a full ring asks for nothing");
+        assert_eq!(s.step(|_, _| 0xEE).item, 0);
+        let r = s.poll_report().unwrap();
+        assert_eq!((r.consumed, r.received, r.retry), (1, 8, false));
+        assert_eq!(s.poll_report(), None, "nothing consumed since");
+        s.step(|_, _| 0xEE);
+        assert_eq!(s.poll_report().map(|r| r.consumed), Some(2));
+    }
+
     /// A refill that brings items restarts the count of steps to the next report (the board
     /// heard from the master); one that brings none (a keep-alive, duplicates) does not.
     #[test]
@@ -873,6 +889,15 @@ mod tests {
         assert!(s.poll_report().is_none());
         assert_eq!(refill(&mut s, 0, &[0, 1, 2]), Ok(0));
         assert_eq!(next_report(&mut s), 2, "after a refill of duplicates");
+        // A refill that fills the ring mid-row: the board stays stand-alone to the row's end,
+        // asks for nothing (no free slot, nothing consumed), and still reports after
+        // `retry_after` steps, as stand-alone, so the master hears it.
+        let mut s = stand_alone();
+        s.step(|_, _| 0xEE);
+        assert!(s.poll_report().is_none());
+        assert_eq!(refill(&mut s, 8, &[8, 9, 10, 11, 12, 13, 14, 15]), Ok(8));
+        assert_eq!(next_report(&mut s), 3, "stand-alone with a full ring");
+        assert_eq!(s.mode(), Mode::StandAlone);
     }
 
     fn sync(s: &mut Slave<8>, first: u16, items: &[u8], boot: u8) -> Result<usize, FrameError> {
