@@ -822,9 +822,10 @@ mod tests {
         let (_, col) = s.position();
         assert_ne!(col, 0);
         refill(&mut s, 8, &[8, 9, 10, 11, 12, 13, 14, 15]).unwrap();
-        while s.position().1 != 0 {
+        for _ in col..4 {
             assert_eq!(s.step(|_, _| 0xEE).source, Source::Local);
         }
+        assert_eq!(s.position().1, 0, "the row ended");
         let next: Vec<u8> = (0..4).map(|_| s.step(|_, _| 0xEE).item).collect();
         assert_eq!(next, [8, 9, 10, 11]);
         assert_eq!(s.mode(), Mode::Linked);
@@ -861,8 +862,12 @@ mod tests {
             }
             assert_eq!(s.mode(), Mode::StandAlone);
             // Just after a report, at the start of a row.
+            // (Reports every 3 steps, rows of 4: within 12 steps.)
+            let mut steps = 0;
             while !(s.position().1 == 0 && s.poll_report().is_some()) {
+                assert!(steps < 12, "no report at the start of a row");
                 s.step(|_, _| 0xEE);
+                steps += 1;
             }
             s
         };

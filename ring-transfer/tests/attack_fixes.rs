@@ -232,9 +232,18 @@ fn outage_relinks<const N: usize>(config: SlaveConfig, d: u64, col: u16, outage:
     for _ in 0..(4 * N as u64 + 8 * d + 3 * u64::from(config.row_len) + 64) {
         run.tick();
     }
-    while run.slave.position().1 != col {
+    // Every column comes round within a row.
+    for _ in 0..config.row_len {
+        if run.slave.position().1 == col {
+            break;
+        }
         run.tick();
     }
+    assert_eq!(
+        run.slave.position().1,
+        col,
+        "{config:?}: column {col} within a row"
+    );
     assert_eq!(run.slave.mode(), Mode::Linked, "{config:?}: linked before");
     run.outage = Some((run.now, run.now + outage));
     for _ in 0..outage {
