@@ -839,7 +839,9 @@ mod tests {
         assert!(s.poll_report().unwrap().hello);
         assert_eq!(refill(&mut s, 0, &[0, 1, 2, 3, 4, 5, 6, 7]), Ok(8));
         assert_eq!(s.poll_report(), None, "a full ring asks for nothing");
+        assert_eq!((s.slack(), s.requests()), (8, 0));
         assert_eq!(s.step(|_, _| 0xEE).item, 0);
+        assert_eq!((s.slack(), s.requests()), (7, 1), "one free slot");
         let r = s.poll_report().unwrap();
         assert_eq!((r.consumed, r.received, r.retry), (1, 8, false));
         assert_eq!(s.poll_report(), None, "nothing consumed since");
