@@ -339,8 +339,12 @@ fn check_by(
             None => return Ok(Verdict::RingTooShort { slave: i }),
         }
     }
-    // For display: the rounded-up sum is within n·2⁻⁶⁴ of the truth.
-    let ppm = u64::try_from(rounded_up.saturating_mul(1_000_000) >> 64).unwrap_or(u64::MAX);
+    // For display, rounded up: from the exact sum when it fits in 128 bits, else from the
+    // rounded-up sum (within n·2⁻⁶⁴ above the truth).
+    let ppm = exact
+        .and_then(|sum| Some(div_ceil(sum.num.checked_mul(1_000_000)?, sum.den)))
+        .unwrap_or_else(|| div_ceil(rounded_up.saturating_mul(1_000_000), 1 << 64));
+    let ppm = u64::try_from(ppm).unwrap_or(u64::MAX);
     // Exact when the sum of fractions fits in 128 bits, rounded up (safe) when it does not.
     let overloaded = exact.map_or(rounded_up > 1 << 64, |sum| sum.num > sum.den);
     if overloaded {
@@ -393,6 +397,21 @@ fn check_by(
 mod tests {
     use super::*;
 
+    /// `f()` on its own thread; fails if it has not returned within 5 s (a search or a capped
+    /// check that never ends is a failure, not a hang). Under Miri `f` simply runs.
+    fn promptly<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
+        if cfg!(miri) {
+            return f();
+        }
+        let (done, result) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let _ = done.send(f());
+        });
+        result
+            .recv_timeout(std::time::Duration::from_secs(5))
+            .expect("returned within 5 s")
+    }
+
     const LINK: LinkSpec = LinkSpec {
         item_time: 10,
         latency: 0,
@@ -413,128 +432,205 @@ mod tests {
 
     #[test]
     fn a_short_ring_beside_long_ones() {
-        let link = LinkSpec {
-            item_time: 10,
-            latency: 0,
-        };
-        let loads = [
-            Load { t0: 30, ring: 40 },
-            Load { t0: 30, ring: 40 },
-            Load { t0: 60, ring: 2 },
-        ];
-        let verdict = check(&loads, link).unwrap();
-        assert!(verdict.is_schedulable(), "{verdict:?}");
-        assert_eq!(min_ring(&loads, link, 2, 100), Ok(Some(2)));
+        promptly(|| {
+            let link = LinkSpec {
+                item_time: 10,
+                latency: 0,
+            };
+            let loads = [
+                Load { t0: 30, ring: 40 },
+                Load { t0: 30, ring: 40 },
+                Load { t0: 60, ring: 2 },
+            ];
+            let verdict = check(&loads, link).unwrap();
+            assert!(verdict.is_schedulable(), "{verdict:?}");
+            assert_eq!(min_ring(&loads, link, 2, 100), Ok(Some(2)));
+            // The smallest ring is searched for too when it is all that is allowed.
+            assert_eq!(min_ring(&loads, link, 2, 2), Ok(Some(2)));
+            assert_eq!(min_ring(&loads, link, 2, 1), Ok(None));
+        });
     }
 
     #[test]
     fn blocking_counts_below_the_largest_deadline() {
-        // Slave 1 has a deadline of 10 = one item time; an item for slave 0 may have just
-        // started, so 10 + 9 > 10.
-        let loads = [Load { t0: 1000, ring: 10 }, Load { t0: 10, ring: 2 }];
-        let link = LinkSpec {
-            item_time: 10,
-            latency: 0,
-        };
-        assert!(matches!(
-            check(&loads, link),
-            Ok(Verdict::Overloaded { .. } | Verdict::DeadlineMiss { .. })
-        ));
-        let loads = [Load { t0: 1000, ring: 10 }, Load { t0: 40, ring: 2 }];
+        promptly(|| {
+            // Slave 1 has a deadline of 10 = one item time; an item for slave 0 may have just
+            // started, so 10 + 9 > 10.
+            let loads = [Load { t0: 1000, ring: 10 }, Load { t0: 10, ring: 2 }];
+            let link = LinkSpec {
+                item_time: 10,
+                latency: 0,
+            };
+            assert!(matches!(
+                check(&loads, link),
+                Ok(Verdict::Overloaded { .. } | Verdict::DeadlineMiss { .. })
+            ));
+            let loads = [Load { t0: 1000, ring: 10 }, Load { t0: 40, ring: 2 }];
+            assert_eq!(
+                check(&loads, link),
+                Ok(Verdict::Schedulable {
+                    utilisation_ppm: 260_000
+                })
+            );
+            let loads = [Load { t0: 1000, ring: 10 }, Load { t0: 18, ring: 2 }];
+            assert_eq!(
+                check(&loads, link),
+                Ok(Verdict::DeadlineMiss {
+                    interval: 18,
+                    demand: 19
+                })
+            );
+        });
+    }
+
+    #[test]
+    fn errors_and_short_rings() {
+        promptly(|| {
+            assert_eq!(check(&[], LINK), Err(CapacityError::NoSlaves));
+            assert_eq!(
+                check(&[Load { t0: 0, ring: 4 }], LINK),
+                Err(CapacityError::ZeroRate { slave: 0 })
+            );
+            assert_eq!(
+                check(
+                    &[Load { t0: 1, ring: 4 }],
+                    LinkSpec {
+                        item_time: 0,
+                        latency: 0
+                    }
+                ),
+                Err(CapacityError::ZeroItemTime)
+            );
+            assert_eq!(
+                check(&[Load { t0: 100, ring: 1 }], LINK),
+                Ok(Verdict::RingTooShort { slave: 0 })
+            );
+            assert_eq!(
+                check(
+                    &[Load { t0: 100, ring: 3 }],
+                    LinkSpec {
+                        item_time: 10,
+                        latency: 150
+                    }
+                ),
+                Ok(Verdict::RingTooShort { slave: 0 })
+            );
+            assert_eq!(
+                check(
+                    &[Load {
+                        t0: u64::MAX,
+                        ring: 3
+                    }],
+                    LINK
+                ),
+                Err(CapacityError::Overflow)
+            );
+            assert_eq!(
+                min_ring(&[], LINK, 0, 10),
+                Err(CapacityError::UnknownSlave(0))
+            );
+            let absurd = [
+                Load { t0: 1, ring: 4 },
+                Load {
+                    t0: 1_000_000_000,
+                    ring: 30_000,
+                },
+            ];
+            assert!(matches!(
+                check(
+                    &absurd,
+                    LinkSpec {
+                        item_time: 1,
+                        latency: 0
+                    }
+                ),
+                Ok(Verdict::Overloaded { .. })
+            ));
+            let absurd = [
+                Load { t0: 2, ring: 4 },
+                Load {
+                    t0: 1_000_000_000,
+                    ring: 30_000,
+                },
+            ];
+            assert!(matches!(
+                check(
+                    &absurd,
+                    LinkSpec {
+                        item_time: 1,
+                        latency: 0
+                    }
+                ),
+                Err(CapacityError::TooComplex { .. })
+            ));
+        });
+    }
+
+    #[test]
+    fn demand_equal_to_the_interval_fits() {
+        // At L = 19 the short-ringed slave's one item and the longest blocking (9) need exactly
+        // 19: the link just makes it (the test is demand ≤ L). U = 1/100 + 10/19 = 0.5363157…,
+        // reported rounded up.
+        let loads = [Load { t0: 1000, ring: 10 }, Load { t0: 19, ring: 2 }];
         assert_eq!(
-            check(&loads, link),
+            check(&loads, LINK),
             Ok(Verdict::Schedulable {
-                utilisation_ppm: 260_000
-            })
-        );
-        let loads = [Load { t0: 1000, ring: 10 }, Load { t0: 18, ring: 2 }];
-        assert_eq!(
-            check(&loads, link),
-            Ok(Verdict::DeadlineMiss {
-                interval: 18,
-                demand: 19
+                utilisation_ppm: 536_316
             })
         );
     }
 
     #[test]
-    fn errors_and_short_rings() {
-        assert_eq!(check(&[], LINK), Err(CapacityError::NoSlaves));
+    fn sums_past_128_bits_fall_back_to_the_rounded_up_utilisation() {
+        // Three pairwise coprime periods near 3·2⁶²: the exact sum of C/Tᵢ needs a denominator
+        // of ~2¹⁹⁰, so the 2⁻⁶⁴ fixed-point sum (each term rounded up) decides.
+        let ts = [(3 << 62) + 1, (3 << 62) + 3, (3 << 62) - 1];
+        let loads = ts.map(|t0| Load { t0, ring: 2 });
+        // C = 2⁶²: the rounded-up sum is exactly 2⁶⁴ (U just below 1): accepted.
+        let at_one = LinkSpec {
+            item_time: 1 << 62,
+            latency: 0,
+        };
         assert_eq!(
-            check(&[Load { t0: 0, ring: 4 }], LINK),
-            Err(CapacityError::ZeroRate { slave: 0 })
+            check(&loads, at_one),
+            Ok(Verdict::Schedulable {
+                utilisation_ppm: 1_000_000
+            })
         );
+        // C = 2⁶³: U just below 2 (1.99999999…, reported rounded up): overloaded.
+        let at_two = LinkSpec {
+            item_time: 1 << 63,
+            latency: 0,
+        };
         assert_eq!(
-            check(
-                &[Load { t0: 1, ring: 4 }],
-                LinkSpec {
-                    item_time: 0,
-                    latency: 0
-                }
+            check(&loads, at_two),
+            Ok(Verdict::Overloaded {
+                utilisation_ppm: 2_000_000
+            })
+        );
+    }
+
+    #[test]
+    fn error_messages_name_the_problem() {
+        let cases = [
+            (CapacityError::NoSlaves, "no slaves to check"),
+            (
+                CapacityError::ZeroRate { slave: 3 },
+                "slave 3: t0 must be at least 1",
             ),
-            Err(CapacityError::ZeroItemTime)
-        );
-        assert_eq!(
-            check(&[Load { t0: 100, ring: 1 }], LINK),
-            Ok(Verdict::RingTooShort { slave: 0 })
-        );
-        assert_eq!(
-            check(
-                &[Load { t0: 100, ring: 3 }],
-                LinkSpec {
-                    item_time: 10,
-                    latency: 150
-                }
+            (CapacityError::ZeroItemTime, "item_time must be at least 1"),
+            (CapacityError::UnknownSlave(7), "slave 7 is not in the set"),
+            (
+                CapacityError::Overflow,
+                "a deadline does not fit in 64 bits",
             ),
-            Ok(Verdict::RingTooShort { slave: 0 })
-        );
-        assert_eq!(
-            check(
-                &[Load {
-                    t0: u64::MAX,
-                    ring: 3
-                }],
-                LINK
+            (
+                CapacityError::TooComplex { points: 12 },
+                "12 deadline points x slaves to check (at most 10000000)",
             ),
-            Err(CapacityError::Overflow)
-        );
-        assert_eq!(
-            min_ring(&[], LINK, 0, 10),
-            Err(CapacityError::UnknownSlave(0))
-        );
-        let absurd = [
-            Load { t0: 1, ring: 4 },
-            Load {
-                t0: 1_000_000_000,
-                ring: 30_000,
-            },
         ];
-        assert!(matches!(
-            check(
-                &absurd,
-                LinkSpec {
-                    item_time: 1,
-                    latency: 0
-                }
-            ),
-            Ok(Verdict::Overloaded { .. })
-        ));
-        let absurd = [
-            Load { t0: 2, ring: 4 },
-            Load {
-                t0: 1_000_000_000,
-                ring: 30_000,
-            },
-        ];
-        assert!(matches!(
-            check(
-                &absurd,
-                LinkSpec {
-                    item_time: 1,
-                    latency: 0
-                }
-            ),
-            Err(CapacityError::TooComplex { .. })
-        ));
+        for (error, message) in cases {
+            assert_eq!(error.to_string(), message);
+        }
     }
 }

@@ -438,6 +438,68 @@ mod tests {
     }
 
     #[test]
+    fn error_messages_name_the_problem() {
+        let mut buf = [0; MAX_FRAME];
+        let crc = {
+            let n = Refill::keep_alive(1).encode(&mut buf).unwrap();
+            buf[2] ^= 0x01;
+            decode(&buf[..n]).unwrap_err()
+        };
+        let DecodeError::Checksum { carried, computed } = crc else {
+            panic!("{crc:?}");
+        };
+        let decode_cases = [
+            (decode(&[]).unwrap_err(), "empty frame".to_string()),
+            (
+                decode(&[0x00]).unwrap_err(),
+                "unknown frame tag 0x00 (0xa5 report, 0x5a refill)".to_string(),
+            ),
+            (
+                decode(&[REPORT_TAG, 1]).unwrap_err(),
+                "frame length: expected 10 bytes, got 2".to_string(),
+            ),
+            (
+                decode(&[REFILL_TAG, 1, 0, 0, 0, 0, 65]).unwrap_err(),
+                "refill of 65 items (at most 64)".to_string(),
+            ),
+            (
+                crc,
+                format!("CRC mismatch: frame carries {carried:#06x}, bytes give {computed:#06x}"),
+            ),
+            (
+                DecodeError::ReservedFlags(0x80),
+                "frame flags 0x80 use reserved bits".to_string(),
+            ),
+        ];
+        for (error, message) in decode_cases {
+            assert_eq!(error.to_string(), message, "{error:?}");
+        }
+        let encode_cases = [
+            (
+                Refill {
+                    items: &[0; 4],
+                    ..Refill::keep_alive(0)
+                }
+                .encode(&mut buf[..12])
+                .unwrap_err(),
+                "buffer of 12 bytes, the frame needs 13",
+            ),
+            (
+                Refill {
+                    items: &[0; 65],
+                    ..Refill::keep_alive(0)
+                }
+                .encode(&mut buf)
+                .unwrap_err(),
+                "refill of 65 items (at most 64)",
+            ),
+        ];
+        for (error, message) in encode_cases {
+            assert_eq!(error.to_string(), message, "{error:?}");
+        }
+    }
+
+    #[test]
     fn every_rule_has_its_error() {
         let mut buf = [0; MAX_FRAME];
         assert_eq!(decode(&[]), Err(DecodeError::Empty));

@@ -403,6 +403,19 @@ mod tests {
         );
     }
 
+    /// `capacity` is the number of items a ring takes before it hands one back.
+    #[test]
+    fn capacity_is_what_a_full_ring_takes() {
+        fn taken<const N: usize>() -> (usize, usize) {
+            let mut ring: Ring<u8, N> = Ring::new();
+            let taken = (0..=N).take_while(|_| ring.receive(7).is_ok()).count();
+            (taken, ring.capacity())
+        }
+        assert_eq!(taken::<1>(), (1, 1));
+        assert_eq!(taken::<3>(), (3, 3));
+        assert_eq!(taken::<5>(), (5, 5));
+    }
+
     /// The least slack keeps its meaning: the fewest items left right after a consumption, the
     /// capacity before any and again after a reset, 0 after an underrun — and `clear` (no
     /// consumption) does not move it.

@@ -822,12 +822,89 @@ mod tests {
         let (_, col) = s.position();
         assert_ne!(col, 0);
         refill(&mut s, 8, &[8, 9, 10, 11, 12, 13, 14, 15]).unwrap();
-        while s.position().1 != 0 {
+        for _ in col..4 {
             assert_eq!(s.step(|_, _| 0xEE).source, Source::Local);
         }
+        assert_eq!(s.position().1, 0, "the row ended");
         let next: Vec<u8> = (0..4).map(|_| s.step(|_, _| 0xEE).item).collect();
         assert_eq!(next, [8, 9, 10, 11]);
         assert_eq!(s.mode(), Mode::Linked);
+    }
+
+    /// A report at once when the ring has a free slot and something was consumed since the
+    /// last one; none while the ring is full, none again before the next consumption.
+    #[test]
+    fn a_report_when_a_slot_is_free_and_something_was_consumed() {
+        let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
+        assert!(s.poll_report().unwrap().hello);
+        assert_eq!(refill(&mut s, 0, &[0, 1, 2, 3, 4, 5, 6, 7]), Ok(8));
+        assert_eq!(s.poll_report(), None, "a full ring asks for nothing");
+        assert_eq!((s.slack(), s.requests()), (8, 0));
+        assert_eq!(s.step(|_, _| 0xEE).item, 0);
+        assert_eq!((s.slack(), s.requests()), (7, 1), "one free slot");
+        let r = s.poll_report().unwrap();
+        assert_eq!((r.consumed, r.received, r.retry), (1, 8, false));
+        assert_eq!(s.poll_report(), None, "nothing consumed since");
+        s.step(|_, _| 0xEE);
+        assert_eq!(s.poll_report().map(|r| r.consumed), Some(2));
+    }
+
+    /// A refill that brings items restarts the count of steps to the next report (the board
+    /// heard from the master); one that brings none (a keep-alive, duplicates) does not.
+    #[test]
+    fn only_a_refill_that_brings_items_restarts_the_report_countdown() {
+        // Stand-alone, reports every `retry_after` = 3 steps when polled every step.
+        let stand_alone = || {
+            let mut s: Slave<8> = Slave::new(CONFIG).unwrap();
+            let _ = s.poll_report();
+            refill(&mut s, 0, &[0, 1, 2, 3, 4, 5, 6, 7]).unwrap();
+            for _ in 0..20 {
+                s.step(|_, _| 0xEE);
+                let _ = s.poll_report();
+            }
+            assert_eq!(s.mode(), Mode::StandAlone);
+            // Just after a report, at the start of a row.
+            // (Reports every 3 steps, rows of 4: within 12 steps.)
+            let mut steps = 0;
+            while !(s.position().1 == 0 && s.poll_report().is_some()) {
+                assert!(steps < 12, "no report at the start of a row");
+                s.step(|_, _| 0xEE);
+                steps += 1;
+            }
+            s
+        };
+        // Steps (polled after each) until the next report.
+        let next_report = |s: &mut Slave<8>| {
+            (1..=10)
+                .find(|_| {
+                    s.step(|_, _| 0xEE);
+                    s.poll_report().is_some()
+                })
+                .unwrap()
+        };
+        let mut s = stand_alone();
+        assert_eq!(next_report(&mut s), 3, "undisturbed");
+        // One step, then a refill with items: three more steps to the next report.
+        let mut s = stand_alone();
+        s.step(|_, _| 0xEE);
+        assert!(s.poll_report().is_none());
+        assert_eq!(refill(&mut s, 8, &[8, 9, 10]), Ok(3));
+        assert_eq!(next_report(&mut s), 3, "after a refill with items");
+        // One step, then a refill of items already held: the countdown goes on.
+        let mut s = stand_alone();
+        s.step(|_, _| 0xEE);
+        assert!(s.poll_report().is_none());
+        assert_eq!(refill(&mut s, 0, &[0, 1, 2]), Ok(0));
+        assert_eq!(next_report(&mut s), 2, "after a refill of duplicates");
+        // A refill that fills the ring mid-row: the board stays stand-alone to the row's end,
+        // asks for nothing (no free slot, nothing consumed), and still reports after
+        // `retry_after` steps, as stand-alone, so the master hears it.
+        let mut s = stand_alone();
+        s.step(|_, _| 0xEE);
+        assert!(s.poll_report().is_none());
+        assert_eq!(refill(&mut s, 8, &[8, 9, 10, 11, 12, 13, 14, 15]), Ok(8));
+        assert_eq!(next_report(&mut s), 3, "stand-alone with a full ring");
+        assert_eq!(s.mode(), Mode::StandAlone);
     }
 
     fn sync(s: &mut Slave<8>, first: u16, items: &[u8], boot: u8) -> Result<usize, FrameError> {

@@ -12,6 +12,7 @@
 )]
 
 mod common;
+mod promptly;
 
 use std::collections::VecDeque;
 
@@ -231,9 +232,18 @@ fn outage_relinks<const N: usize>(config: SlaveConfig, d: u64, col: u16, outage:
     for _ in 0..(4 * N as u64 + 8 * d + 3 * u64::from(config.row_len) + 64) {
         run.tick();
     }
-    while run.slave.position().1 != col {
+    // Every column comes round within a row.
+    for _ in 0..config.row_len {
+        if run.slave.position().1 == col {
+            break;
+        }
         run.tick();
     }
+    assert_eq!(
+        run.slave.position().1,
+        col,
+        "{config:?}: column {col} within a row"
+    );
     assert_eq!(run.slave.mode(), Mode::Linked, "{config:?}: linked before");
     run.outage = Some((run.now, run.now + outage));
     for _ in 0..outage {
@@ -386,22 +396,40 @@ fn many_slaves_times_many_points_is_refused_promptly() {
         latency: 0,
     };
     let started = std::time::Instant::now();
-    let verdict = check(&loads, link);
+    // A check that grinds through the 2·10¹⁰ terms fails here rather than hangs.
+    let absurd = loads.clone();
+    let verdict = promptly::promptly(move || check(&absurd, link));
     assert!(
         matches!(verdict, Err(CapacityError::TooComplex { points }) if points > MAX_POINTS),
         "{verdict:?}"
     );
     assert!(started.elapsed().as_secs() < 1, "{:?}", started.elapsed());
-    // The largest work the cap lets through still returns within seconds in a debug build.
-    let fits = MAX_POINTS / 2_000; // points for 2 000 slaves, at most the cap in all
-    loads[0] = Load { t0: 2, ring: 3 };
+    // Exactly the cap is let through, and still returns within seconds in a debug build: slave
+    // 0 (deadline 4, t0 2) has ⌈(d_max − 4)/2⌉ points below the others' deadline d_max = 2·t0,
+    // each summing 2 000 slaves' demand.
+    let per_slave = MAX_POINTS / 2_000;
+    let t0_for = |points: u64| (4 + 2 * points) / 2; // d_max = 4 + 2·points
     for l in &mut loads[1..] {
-        *l = Load { t0: fits, ring: 3 };
+        *l = Load {
+            t0: t0_for(per_slave),
+            ring: 3,
+        };
     }
     let started = std::time::Instant::now();
     let verdict = check(&loads, link);
     assert!(verdict.is_ok(), "{verdict:?}");
     assert!(started.elapsed().as_secs() < 20, "{:?}", started.elapsed());
+    // One point more per slave is refused, naming the work.
+    for l in &mut loads[1..] {
+        l.t0 = t0_for(per_slave + 1);
+    }
+    let more = loads.clone();
+    assert_eq!(
+        promptly::promptly(move || check(&more, link)),
+        Err(CapacityError::TooComplex {
+            points: MAX_POINTS + 2_000
+        })
+    );
 }
 
 /// The attacker's relink sweep (outages that eat refills, every phase in a row): returns the

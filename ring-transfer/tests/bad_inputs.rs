@@ -18,6 +18,9 @@
     reason = "a test may panic: that is how it fails"
 )]
 
+mod promptly;
+
+use promptly::promptly;
 use regler_ring_transfer::capacity::{
     CapacityError, LinkSpec, Load, Verdict, check, max_slaves, min_ring,
 };
@@ -484,15 +487,18 @@ fn capacity_check_at_the_extremes() {
     }
     // min_ring: (slave, max_ring, result)
     let set = [load(1000, 8), load(2000, 8)];
-    let rows: [(usize, u32, Result<Option<u32>, CapacityError>); 5] = [
+    let rows: [(usize, u32, Result<Option<u32>, CapacityError>); 7] = [
         (2, 100, Err(CapacityError::UnknownSlave(2))),
         (usize::MAX, 100, Err(CapacityError::UnknownSlave(usize::MAX))),
         (0, 0, Ok(None)),
         (0, 1, Ok(None)),
-        (0, u32::MAX, min_ring(&set, link, 0, 1000)),
+        (0, 2, Ok(None)),
+        (0, 3, Ok(Some(3))),
+        (0, u32::MAX, Ok(Some(3))),
     ];
     for (slave, max_ring, want) in rows {
-        assert_eq!(min_ring(&set, link, slave, max_ring), want, "min_ring slave {slave}, max {max_ring}");
+        // A search that never ends is a failure, not a hang (`promptly`).
+        assert_eq!(promptly(move || min_ring(&set, link, slave, max_ring)), want, "min_ring slave {slave}, max {max_ring}");
     }
     // max_slaves: (limit, result)
     for (limit, want) in [(0, Ok(0)), (1, Ok(1))] {
