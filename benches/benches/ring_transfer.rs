@@ -1,7 +1,7 @@
 //! The ring beside its anchors, in one run: `receive` + `next` pairs on a half-full byte ring —
 //! the crate's `Ring<u8, 256>` (statistics on) and split halves, `heapless::spsc::Queue<u8, 256>`
 //! (and `<u8, 257>`, which holds 256 like `Ring<u8, 256>`) used directly and through its own
-//! halves, a plain array ring — in the firmware and the inlined shape; two threads moving 10 million items
+//! halves, a plain array ring — in the firmware and the inlined shape; two threads moving 1 million items
 //! through the split halves and through heapless's; and the master's scheduling decision with 8,
 //! 80 and 500 slaves.
 
@@ -37,7 +37,7 @@ fn pairs(c: &mut Criterion) {
     }
 }
 
-const TRANSFER: u32 = 10_000_000;
+const TRANSFER: u32 = 1_000_000;
 
 /// Moves `TRANSFER` items from a producer thread (`push`, spinning while full) to this thread
 /// (`pop`); returns their sum.

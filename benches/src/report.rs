@@ -363,12 +363,12 @@ fn rows() -> Vec<Row> {
     }
     rows.push(Row {
         group: "two threads through the split halves vs heapless's".into(),
-        path: "two threads, 10 million `u32` through a 256-slot ring, per item".into(),
-        regler: Side::new().time("ring/two-thread transfer/regler Filler+Drainer".into(), 1e7),
+        path: "two threads, 1 million `u32` through a 256-slot ring, per item".into(),
+        regler: Side::new().time("ring/two-thread transfer/regler Filler+Drainer".into(), 1e6),
         anchor_name: "heapless `Producer` + `Consumer`".into(),
         anchor: Side::new().time(
             "ring/two-thread transfer/heapless Producer+Consumer".into(),
-            1e7,
+            1e6,
         ),
     });
     for t in ["f64", "i16f16", "i32f32"] {

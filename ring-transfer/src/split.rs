@@ -122,8 +122,11 @@ shared_items!(
 /// compare-and-swap: a Cortex-M0 runs it).
 ///
 /// It holds **`S` items** of a [`SharedItem`] type; `S` must be a power of two from 1 to 2³¹
-/// (checked when the program is compiled): `SharedRing<u8, 256>` holds 256 bytes. (While it sat
-/// on `heapless::spsc::Queue` it held `S − 1`.)
+/// (checked when the program is built — `cargo build`, not `cargo check`, which does not evaluate
+/// the assertion): `SharedRing<u8, 256>` holds 256 bytes. On a 32-bit target the cells must also
+/// fit its address space: there rustc refuses 2³¹ one-byte cells as too big for the target
+/// before the crate's check is reached. (While it sat on `heapless::spsc::Queue` it held
+/// `S − 1`.)
 ///
 /// [`split`](Self::split) hands out a [`Filler`] (`receive`, the request count and the
 /// cumulative counters a report needs) and a [`Drainer`] (`next`, underruns). The halves borrow
@@ -190,7 +193,8 @@ impl<T: SharedItem, const S: usize> SharedRing<T, S> {
     const SLOTS: u32 = S as u32;
 
     /// An empty ring of `S` slots; `const`, so it can live in a `static`. `S` must be a power of
-    /// two from 1 to 2³¹ (checked when the program is compiled):
+    /// two from 1 to 2³¹ (checked when the program is built; see [`SharedRing`] for 32-bit
+    /// targets):
     ///
     /// ```
     /// use regler_ring_transfer::SharedRing;
