@@ -197,6 +197,7 @@ pub enum AlarmChange {
 ///     min_passages: 100,
 /// }) {
 ///     Ok(h) => h,
+///     // ok: a panic in a const is the compile-time refusal this example shows
 ///     Err(_) => panic!("min_passages above the window"),
 /// };
 /// # let _ = HEALTH;
