@@ -578,6 +578,36 @@ mod tests {
         assert_eq!(SharedRing::<u8, { 1 << 31 }>::SLOTS, 1 << 31);
     }
 
+    /// The `Debug` text a firmware's log shows: the counts as they are, by name.
+    #[test]
+    fn debug_text_shows_the_counts() {
+        let mut ring: SharedRing<u8, 4> = SharedRing::new();
+        {
+            let (mut fill, mut drain) = ring.split();
+            for b in 0..3 {
+                fill.receive(b).unwrap();
+            }
+            assert_eq!(drain.next(), Some(0));
+            assert_eq!(fill.requests(), 2);
+            assert_eq!(
+                format!("{fill:?}"),
+                "Filler { capacity: 4, held: 2, received: 3, least_slack: 2 }"
+            );
+            assert_eq!(
+                (drain.next(), drain.next(), drain.next()),
+                (Some(1), Some(2), None)
+            );
+            assert_eq!(
+                format!("{drain:?}"),
+                "Drainer { consumed: 3, underruns: 1 }"
+            );
+        }
+        assert_eq!(
+            format!("{ring:?}"),
+            "SharedRing { capacity: 4, received: 3, consumed: 3, .. }"
+        );
+    }
+
     #[test]
     fn a_ring_of_s_holds_s() {
         let mut ring: SharedRing<u8, 4> = SharedRing::new();
