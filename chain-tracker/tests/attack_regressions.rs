@@ -698,7 +698,11 @@ fn power_failure_at_every_step_whatever_was_stored() {
                 (2880..=3000).rev().collect(),
             ];
             // Under Miri the second history: up, back past SIA and down again.
-            let histories = if cfg!(miri) { &histories[1..2] } else { &histories[..] };
+            let histories = if cfg!(miri) {
+                &histories[1..2]
+            } else {
+                &histories[..]
+            };
             for hist in histories {
                 let mut tracker = build();
                 let mut meter = StretchMeter::new(cfg).unwrap();
@@ -982,7 +986,11 @@ fn small_recalibrations_up_and_down_full_chain() {
     type Big = Tracker<u16, 64, 3>;
     let mut rng = Rng(99);
     // Under Miri two SIAs and 10 recalibrations each, the chain filling as they go.
-    let sias: &[u32] = if cfg!(miri) { &[7, 3000] } else { &[3, 7, 100, 2999, 3000, 65_535] };
+    let sias: &[u32] = if cfg!(miri) {
+        &[7, 3000]
+    } else {
+        &[3, 7, 100, 2999, 3000, 65_535]
+    };
     for &sia in sias {
         let sa = [0u32, 1, sia.saturating_mul(4) / 3];
         let fresh = Big::new(DistanceTable::new(sia, &sa).unwrap(), 6).unwrap();

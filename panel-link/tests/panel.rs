@@ -402,7 +402,10 @@ fn mot_lies<const R: usize>(
 /// does arrive more than 40 ms after SÄN rose at some phase, so 5 polls (the 5th may come 40 ms
 /// after the rise) would lose keys: 6 is the least that works.
 #[test]
-#[cfg_attr(miri, ignore = "2 900 simulated panels (every phase and start): hours under Miri; runs natively in every CI run")]
+#[cfg_attr(
+    miri,
+    ignore = "2 900 simulated panels (every phase and start): hours under Miri; runs natively in every CI run"
+)]
 fn the_smallest_key_time_out_loses_no_key_on_a_clean_line() {
     let config = HostConfig {
         key_timeout_polls: regler_panel_link::panel::MIN_KEY_TIMEOUT_POLLS,
@@ -707,19 +710,28 @@ fn every_frame_error<const R: usize>() {
 }
 
 #[test]
-#[cfg_attr(miri, ignore = "every one- and two-bit error of every frame of a sequence, every value: hours under Miri; runs natively in every CI run")]
+#[cfg_attr(
+    miri,
+    ignore = "every one- and two-bit error of every frame of a sequence, every value: hours under Miri; runs natively in every CI run"
+)]
 fn every_1_and_2_bit_frame_error_loading_desk() {
     every_frame_error::<7>();
 }
 
 #[test]
-#[cfg_attr(miri, ignore = "every one- and two-bit error of every frame of a sequence, every value: hours under Miri; runs natively in every CI run")]
+#[cfg_attr(
+    miri,
+    ignore = "every one- and two-bit error of every frame of a sequence, every value: hours under Miri; runs natively in every CI run"
+)]
 fn every_1_and_2_bit_frame_error_lane_panel() {
     every_frame_error::<29>();
 }
 
 #[test]
-#[cfg_attr(miri, ignore = "every one- and two-bit error of every frame of a sequence, every value: hours under Miri; runs natively in every CI run")]
+#[cfg_attr(
+    miri,
+    ignore = "every one- and two-bit error of every frame of a sequence, every value: hours under Miri; runs natively in every CI run"
+)]
 fn every_1_and_2_bit_frame_error_central_desk() {
     every_frame_error::<46>();
 }
@@ -797,7 +809,10 @@ fn refresh_bound<const R: usize>(config: HostConfig) -> u64 {
 /// Issue 19 item 6, the examples: MOT toggling at every poll, or dropping one poll in twelve,
 /// froze the displays (0 sequences in 100 s).
 #[test]
-#[cfg_attr(miri, ignore = "200 simulated seconds of a loading desk: hours under Miri; runs natively in every CI run")]
+#[cfg_attr(
+    miri,
+    ignore = "200 simulated seconds of a loading desk: hours under Miri; runs natively in every CI run"
+)]
 fn issue_example_a_chattering_mot_does_not_freeze_the_displays() {
     let config = HostConfig::default();
     for (name, pattern) in [
@@ -819,7 +834,10 @@ fn issue_example_a_chattering_mot_does_not_freeze_the_displays() {
 /// toggling, short glitches…), two configurations: the display is refreshed at least every
 /// bound.
 #[test]
-#[cfg_attr(miri, ignore = "510 MOT patterns, 5 simulated seconds each: hours under Miri; runs natively in every CI run")]
+#[cfg_attr(
+    miri,
+    ignore = "510 MOT patterns, 5 simulated seconds each: hours under Miri; runs natively in every CI run"
+)]
 fn every_short_periodic_mot_pattern_keeps_the_displays_refreshed() {
     for config in [
         HostConfig::default(),
@@ -975,7 +993,10 @@ fn every_bit_pair_on_the_line<const R: usize>(values: &[[u8; R]]) -> (u64, u64) 
 }
 
 #[test]
-#[cfg_attr(miri, ignore = "every pair of bit errors on the line over nine sequences (190 000 runs): hours under Miri; runs natively in every CI run")]
+#[cfg_attr(
+    miri,
+    ignore = "every pair of bit errors on the line over nine sequences (190 000 runs): hours under Miri; runs natively in every CI run"
+)]
 fn every_1_and_2_bit_error_on_the_line() {
     let mut cases = 0;
     let issue = [10u8, 20, 126, 40, 50, 60, 70];

@@ -157,7 +157,10 @@ fn sweep<const W: usize>(seed: u64) {
 }
 
 #[test]
-#[cfg_attr(miri, ignore = "eight window sizes, every pair of 13 limits and the minimums, hundreds of passages each, against the model: hours under Miri; runs natively in every CI run")]
+#[cfg_attr(
+    miri,
+    ignore = "eight window sizes, every pair of 13 limits and the minimums, hundreds of passages each, against the model: hours under Miri; runs natively in every CI run"
+)]
 fn alarm_matches_exact_model_every_window_and_limit() {
     sweep::<1>(1);
     sweep::<2>(2);

@@ -31,7 +31,11 @@ fn reading(true_word: u16) -> impl proptest::strategy::Strategy<Value = u16> {
 /// The longest sequence a property draws: `native`, and at most 40 under Miri, which interprets
 /// every step.
 const fn long(native: usize) -> usize {
-    if cfg!(miri) && native > 40 { 40 } else { native }
+    if cfg!(miri) && native > 40 {
+        40
+    } else {
+        native
+    }
 }
 
 fn passage_readings() -> impl proptest::strategy::Strategy<Value = Vec<u16>> {
