@@ -412,7 +412,8 @@ mod tests {
     /// bits changed in an all-ones word are those set in an all-zeros one.
     #[test]
     fn corrupt_flips_ones_as_well_as_zeros() {
-        for seed in 0..50 {
+        // Under Miri 5 seeds (each bit is drawn by interpreted floating point).
+        for seed in 0..if cfg!(miri) { 5 } else { 50 } {
             let mut zeros = Noise::new(0.25, seed).unwrap();
             let mut ones = Noise::new(0.25, seed).unwrap();
             for _ in 0..20 {

@@ -215,12 +215,14 @@ fn registers<const R: usize>(values: &[u8]) -> Host<R> {
     host
 }
 
+// Under Miri each property below draws one case: a case simulates seconds of the line.
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 300 }))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 1 } else { 300 }))]
 
     /// Any single damaged byte (any change of its 11-bit frame) in the first sequences: once the
     /// next full sequence is through, every register is right.
     #[test]
+    #[cfg_attr(miri, ignore = "four sequences of a 29-register panel in 100 µs steps per case: minutes under Miri; runs natively in every CI run")]
     fn registers_are_right_after_the_next_full_sequence(
         values in proptest::collection::vec(0u8..=127, 29),
         index in 0u64..90,
@@ -254,6 +256,7 @@ proptest! {
 
     /// Any single damaged byte on the key line: every key arrives, once, unaltered, in order.
     #[test]
+    #[cfg_attr(miri, ignore = "2 simulated seconds of the line in 100 µs steps per case: minutes under Miri; runs natively in every CI run")]
     fn a_damaged_key_byte_costs_nothing(
         keys in proptest::collection::vec(0u8..=255, 1..6),
         index in 0u64..12,
@@ -273,6 +276,7 @@ proptest! {
     /// Random bit errors both ways, up to 1 in 100 bits: what arrives is always a key pressed,
     /// in the order pressed, never twice; the displays keep being refreshed.
     #[test]
+    #[cfg_attr(miri, ignore = "3 simulated seconds of a noisy line in 100 µs steps per case: minutes under Miri; runs natively in every CI run")]
     fn noise_never_duplicates_or_alters_a_key(
         keys in proptest::collection::vec(0u8..=255, 1..8),
         rate in 0.0f64..0.01,
@@ -295,12 +299,13 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 100 }))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 1 } else { 100 }))]
 
     /// A MOT wire that chatters (any level flipped at any poll, repeating): keys are still never
     /// duplicated or altered, and the displays keep being refreshed; once the wire behaves again,
     /// the keys still waiting get through.
     #[test]
+    #[cfg_attr(miri, ignore = "6 simulated seconds of the line in 100 µs steps per case: minutes under Miri; runs natively in every CI run")]
     fn a_chattering_mot_never_duplicates_or_alters_a_key(
         keys in proptest::collection::vec(0u8..=255, 1..6),
         glitch in proptest::collection::vec(any::<bool>(), 1..40),
@@ -343,13 +348,14 @@ fn no_two_consecutive(mut glitch: Vec<bool>) -> Vec<bool> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 150 }))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 1 } else { 150 }))]
 
     /// Issue 19 (attack, item 2): a MOT line that lies on any polls (any repeating pattern of
     /// lies, and patterns in which no two consecutive polls lie), a panel that samples SÄN only
     /// on its 20 ms tick (the slowest the handshake allows) or at once, 1, 2 or 7 registers: no
     /// key is ever delivered twice, none is altered, they come in the order pressed.
     #[test]
+    #[cfg_attr(miri, ignore = "seconds of the simulated line in 100 µs steps per case: minutes under Miri; runs natively in every CI run")]
     fn a_lying_mot_line_never_delivers_a_key_twice(
         n in 1usize..6,
         glitch in proptest::collection::vec(any::<bool>(), 1..40),
@@ -396,6 +402,10 @@ fn mot_lies<const R: usize>(
 /// does arrive more than 40 ms after SÄN rose at some phase, so 5 polls (the 5th may come 40 ms
 /// after the rise) would lose keys: 6 is the least that works.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "2 900 simulated panels (every phase and start): hours under Miri; runs natively in every CI run"
+)]
 fn the_smallest_key_time_out_loses_no_key_on_a_clean_line() {
     let config = HostConfig {
         key_timeout_polls: regler_panel_link::panel::MIN_KEY_TIMEOUT_POLLS,
@@ -700,16 +710,28 @@ fn every_frame_error<const R: usize>() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "every one- and two-bit error of every frame of a sequence, every value: hours under Miri; runs natively in every CI run"
+)]
 fn every_1_and_2_bit_frame_error_loading_desk() {
     every_frame_error::<7>();
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "every one- and two-bit error of every frame of a sequence, every value: hours under Miri; runs natively in every CI run"
+)]
 fn every_1_and_2_bit_frame_error_lane_panel() {
     every_frame_error::<29>();
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "every one- and two-bit error of every frame of a sequence, every value: hours under Miri; runs natively in every CI run"
+)]
 fn every_1_and_2_bit_frame_error_central_desk() {
     every_frame_error::<46>();
 }
@@ -787,6 +809,10 @@ fn refresh_bound<const R: usize>(config: HostConfig) -> u64 {
 /// Issue 19 item 6, the examples: MOT toggling at every poll, or dropping one poll in twelve,
 /// froze the displays (0 sequences in 100 s).
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "200 simulated seconds of a loading desk: hours under Miri; runs natively in every CI run"
+)]
 fn issue_example_a_chattering_mot_does_not_freeze_the_displays() {
     let config = HostConfig::default();
     for (name, pattern) in [
@@ -808,6 +834,10 @@ fn issue_example_a_chattering_mot_does_not_freeze_the_displays() {
 /// toggling, short glitches…), two configurations: the display is refreshed at least every
 /// bound.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "510 MOT patterns, 5 simulated seconds each: hours under Miri; runs natively in every CI run"
+)]
 fn every_short_periodic_mot_pattern_keeps_the_displays_refreshed() {
     for config in [
         HostConfig::default(),
@@ -837,11 +867,12 @@ fn every_short_periodic_mot_pattern_keeps_the_displays_refreshed() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 200 }))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 1 } else { 200 }))]
 
     /// Any MOT pattern (random levels, random run lengths), any accepted configuration: the
     /// display is refreshed at least every bound.
     #[test]
+    #[cfg_attr(miri, ignore = "seconds of the simulated line per case: minutes under Miri; runs natively in every CI run")]
     fn any_mot_pattern_keeps_the_displays_refreshed(
         runs in proptest::collection::vec((any::<bool>(), 1u64..150), 1..40),
         key_timeout_polls in 6u16..30,
@@ -962,6 +993,10 @@ fn every_bit_pair_on_the_line<const R: usize>(values: &[[u8; R]]) -> (u64, u64) 
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "every pair of bit errors on the line over nine sequences (190 000 runs): hours under Miri; runs natively in every CI run"
+)]
 fn every_1_and_2_bit_error_on_the_line() {
     let mut cases = 0;
     let issue = [10u8, 20, 126, 40, 50, 60, 70];
@@ -1053,12 +1088,13 @@ fn two_flips_out_of_sync_are_right_within_two_sequences() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 6 }))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 1 } else { 6 }))]
 
     /// The same guarantee with random register values, new ones every sequence, for 1, 2 and 7
     /// registers: every single bit and bit pair over two sequences and the idle byte times on
     /// both sides.
     #[test]
+    #[cfg_attr(miri, ignore = "every pair of bit errors on the line for each drawn case: hours under Miri; runs natively in every CI run")]
     fn every_bit_pair_on_the_line_random_values(
         one in proptest::collection::vec(0u8..=127, 9),
         two in proptest::collection::vec(proptest::array::uniform2(0u8..=127), 9),
@@ -1110,7 +1146,7 @@ fn measure_wrong_values_after_two_flips() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 300 }))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 1 } else { 300 }))]
 
     /// A key pressed at any moment raises SÄN within one sequence (`R + 2` byte times; the
     /// simulation's 100 µs steps add up to one step per byte) plus one MOT poll.

@@ -105,6 +105,10 @@ fn a_saturating_product_raises_overflow_and_holds() {
 /// fault and settles where the f64 one does (within the type's resolution); a refusal is an
 /// OutOfReach whose reach lies beyond the type.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "300 stations run 600 samples each: hours under Miri; runs natively in every CI run"
+)]
 fn accepted_configurations_track_f64_and_refusals_name_a_term_beyond_the_type() {
     let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut rand = move || {

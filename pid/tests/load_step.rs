@@ -11,6 +11,10 @@
 use regler_pid::{Action, Config, Kind, Pid};
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "twelve loops of 400 000 samples: hours under Miri; runs natively in every CI run"
+)]
 fn integral_of_the_error_after_a_load_step_is_minus_ti_over_k_times_the_load() {
     let h = 0.01f64;
     let t = 1.0; // process: y' = (−y + u + l) / t

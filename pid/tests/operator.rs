@@ -35,6 +35,10 @@ struct Model {
 
 /// Every interleaving of up to six edits, commits, discards and samples.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "every sequence of up to six operator actions (19 530 stations): hours under Miri; runs natively in every CI run"
+)]
 fn a_commit_puts_into_force_the_set_as_it_was_when_committed() {
     let params = Parameters {
         config: Config::default(),
@@ -170,6 +174,10 @@ fn fixed_point_station_refuses_a_scale_it_would_clip() {
 /// and on every scale it accepts the 4096 counts are strictly increasing in the type and the
 /// set-point minus the measurement is the span, unclipped.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "640 random scales, every one of 4 096 counts: hours under Miri; runs natively in every CI run"
+)]
 fn every_number_type_holds_the_scales_a_station_accepts() {
     #[cfg(feature = "fixed")]
     use fixed::types::{I16F16, I32F32};
@@ -291,6 +299,10 @@ fn with(kind: Kind, ti: f64, td: f64) -> Parameters {
 /// accepted is exactly what the model allows, so no path — start, edit or kind change — gets a
 /// TI or TD the kind uses outside the operator's limits into the shadow set or into force.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "every kind, TI, TD, next kind and edited value (34 000 edits): hours under Miri; runs natively in every CI run"
+)]
 fn no_path_gets_round_the_operator_limits() {
     let scaling = Scaling::new(0.0, 100.0).unwrap();
     for kind in Kind::ALL {
@@ -389,6 +401,10 @@ fn the_night_setpoint_stays_on_the_scale() {
 /// the span, at most RFEL/2); an error alternating RFEL ± 0.001 is one alarm however often the
 /// operator acknowledges, and the buzzer is silent after the first acknowledge.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "20 000 station samples against the model: hours under Miri; runs natively in every CI run"
+)]
 fn a_noisy_error_near_rfel_is_one_alarm() {
     let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut rand = move || {

@@ -101,6 +101,10 @@ fn config(h: f64) -> RelayConfig {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "relay experiments on eleven benchmark processes, thousands of samples each: hours under Miri; runs natively in every CI run"
+)]
 fn relay_recovers_the_ultimate_point_of_the_benchmark_processes() {
     let h = 0.005;
     let mut cases: Vec<(String, Process, Ultimate)> = Vec::new();
@@ -156,6 +160,10 @@ fn relay_recovers_the_ultimate_point_of_the_benchmark_processes() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "noisy relay experiments of thousands of samples: hours under Miri; runs natively in every CI run"
+)]
 fn noise_below_the_hysteresis_is_harmless_and_above_it_is_named() {
     let h = 0.01;
     // Deterministic pseudo-noise of peak 0.01.
@@ -215,6 +223,10 @@ fn a_process_that_never_answers_times_out() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "200 000 samples of a relay experiment: hours under Miri; runs natively in every CI run"
+)]
 fn a_failing_sensor_only_pauses_the_experiment_and_abort_returns_the_bias() {
     let h = 0.01;
     let mut process = Process::new(3, 1.0, 0.0, h);
@@ -256,6 +268,10 @@ fn a_failing_sensor_only_pauses_the_experiment_and_abort_returns_the_bias() {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "11 000 samples of a relay experiment and the tuned loop: hours under Miri; runs natively in every CI run"
+)]
 fn hand_over_is_bumpless_and_the_tuned_loop_settles() {
     let h = 0.01;
     let bias = 0.5;
@@ -319,6 +335,10 @@ fn step_log(
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "step logs of thousands of samples, fitted: hours under Miri; runs natively in every CI run"
+)]
 fn step_identification_recovers_fopdt_models_and_names_what_it_cannot_fit() {
     use regler_pid::tuning::{IdentifyError, amigo, identify_step, simc};
     let h = 0.05;
@@ -457,6 +477,10 @@ fn samples_to_timeout<F: regler_pid::Real>(h: F, timeout: F, bound: u64) -> Opti
 /// (⌊timeout/h⌋ + 1), also where an f32 clock `t += h` stalls (h = 1 ms, 40 000 s: t/h ≈ 4·10⁷
 /// > 2²⁴).
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "counts up to 40 million samples to the time-out: days under Miri; runs natively in every CI run"
+)]
 fn the_f32_relay_times_out_at_the_same_sample_as_the_f64_one() {
     for (h, timeout) in [(1e-3, 40_000.0), (0.1, 60.0), (0.01, 1_000.0)] {
         let expected = (timeout / h) as u64 + 1;
@@ -492,6 +516,10 @@ fn the_f32_relay_times_out_at_the_same_sample_as_the_f64_one() {
 /// step of 1 ms to 2 ms): the period is a difference of
 /// sample counts, not of two large float times.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "up to 20 million samples before the oscillation: days under Miri; runs natively in every CI run"
+)]
 fn the_f32_relay_measures_a_late_oscillation_right() {
     let h = 1e-3f32;
     let truth = lag_chain_ultimate(3);
@@ -616,6 +644,7 @@ mod identify_properties {
         /// 30 samples per T + L, a 20 T log, 20 samples before the step and 2 % noise broke the
         /// earlier bound in 1 seed of 10).
         #[test]
+        #[cfg_attr(miri, ignore = "step logs of up to 60 000 samples per case, fitted: hours under Miri; runs natively in every CI run")]
         fn any_fopdt_is_recovered_within_the_stated_tolerance(
             k_mag in 0.01f64..100.0,
             negative in any::<bool>(),
@@ -653,6 +682,7 @@ mod identify_properties {
         /// goes the wrong way by 2 % or more, a sustained oscillation of 2 % or more, an
         /// integrating process (a ramp); noise up to 0.2 % of the change.
         #[test]
+        #[cfg_attr(miri, ignore = "step logs of thousands of samples per case, fitted: hours under Miri; runs natively in every CI run")]
         fn any_response_it_cannot_represent_is_an_error(
             shape in 0usize..4,
             zeta in 0.05f64..0.77,
@@ -713,6 +743,10 @@ mod identify_properties {
 /// 2·e^(−5s)/(1 + 60s) (the tail is 70 000 and 300 000 samples, beyond u16), in f64 and f32,
 /// with and without noise (1 % of the change, 1 000 samples before the step).
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "step logs of up to three million samples: hours under Miri; runs natively in every CI run"
+)]
 fn identify_step_is_right_on_logs_of_millions_of_samples() {
     let (k, t, l) = (2.0, 60.0, 5.0);
     for n in [700_000usize, 3_000_000] {
@@ -741,6 +775,10 @@ fn identify_step_is_right_on_logs_of_millions_of_samples() {
 /// the earlier bound, by up to 1.73×), and the mid-class case K 0.549, T 6.54, L 3.61, 1.6 %
 /// (8 of 1 000). Every seed must give a model within the stated tolerance.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "step logs fitted over a thousand noise seeds: hours under Miri; runs natively in every CI run"
+)]
 fn the_stated_tolerance_holds_at_the_corners_over_many_noise_seeds() {
     let seeds: u64 = std::env::var("SEEDS").map_or(300, |v| v.parse().unwrap());
     for (k, t, l, per_tl, settle, pre, nu, step, base) in [
@@ -795,6 +833,7 @@ mod refusals {
         /// more (the noise is then read from the tail's neighbour-to-neighbour changes, which a
         /// faster oscillation looks like).
         #[test]
+        #[cfg_attr(miri, ignore = "oscillating logs of 600 to 6 000 samples per case, fitted: hours under Miri; runs natively in every CI run")]
         fn a_sustained_oscillation_is_refused(
             t in 0.5f64..50.0,
             l_in_t in 0.0f64..2.0,
@@ -828,6 +867,7 @@ mod refusals {
         /// as in the class, T and L within 4 % of T + L instead of 2 %); noise-free, every log
         /// shorter than 5 T is refused.
         #[test]
+        #[cfg_attr(miri, ignore = "step logs of up to 24 000 samples per case, fitted: hours under Miri; runs natively in every CI run")]
         fn a_short_log_is_refused_or_within_the_tolerance(
             t in 0.1f64..100.0,
             l_in_t in 0.0f64..3.0,
@@ -867,6 +907,10 @@ mod refusals {
     /// 2–50 %, periods 1–40 s: 732 of 1 950 fitted), and a first-order log 2.3 T long (K off
     /// by 11 %).
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "650 oscillating logs, fitted: hours under Miri; runs natively in every CI run"
+    )]
     fn the_reported_oscillations_and_short_log_are_refused() {
         let (h, n, pre) = (0.1, 3000usize, 50usize);
         for amplitude in [0.02, 0.05, 0.1, 0.2, 0.5] {
@@ -1065,6 +1109,10 @@ fn the_rules_never_return_non_finite_results() {
 /// apply refuses Ti < h by name; the model with the sampling delay (L + h/2) gives a loop that
 /// settles — for AMIGO PI and PID and SIMC, on pure lags of 2 to 200 samples' time constant.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "closed loops of at least 3 000 samples for four dead times: hours under Miri; runs natively in every CI run"
+)]
 fn a_pure_lag_is_refused_raw_and_settles_with_the_sampling_delay() {
     use regler_pid::tuning::{amigo, identify_step_at, simc};
     use regler_pid::{ConfigError, Parameter};

@@ -273,6 +273,10 @@ fn outage_relinks<const N: usize>(config: SlaveConfig, d: u64, col: u16, outage:
 /// The largest accepted limits (a silence limit or a row that takes up the whole sum) relink
 /// after outages of up to 100 000 steps, cut anywhere in a row.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "outages of up to 100 000 steps: hours under Miri; runs natively in every CI run"
+)]
 fn largest_accepted_limits_relink_after_any_outage() {
     let long_silence = SlaveConfig {
         silence_limit: MAX_DRIFT as u32 - 4 - 8,
@@ -301,6 +305,10 @@ fn largest_accepted_limits_relink_after_any_outage() {
 /// holds (and is reached) over small configurations, every column of the cut, and delays
 /// 0–3 with a ring of at least 4·d slots.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "every delay, row length, silence limit and column on four ring sizes: hours under Miri; runs natively in every CI run"
+)]
 fn drift_stays_within_the_stated_bound() {
     fn one<const N: usize>(reached: &mut u64) {
         for d in 0..=3u64 {
@@ -381,6 +389,10 @@ fn edf_deadline_near_u64_max_still_served() {
 /// 2 000 slaves beside one fast one: few points per slave but 2·10¹⁰ demand terms. Refused
 /// at once now (it ran 40 s in release): the cap bounds points × slaves.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "times a capacity check of MAX_POINTS terms against the wall clock: an interpreter is hundreds of times slower; runs natively in every CI run"
+)]
 fn many_slaves_times_many_points_is_refused_promptly() {
     use regler_ring_transfer::capacity::{CapacityError, LinkSpec, Load, MAX_POINTS, check};
     let mut loads = vec![
@@ -530,6 +542,10 @@ fn relink_sweep_measure() {
 /// sweep (every phase in a row, three outage lengths, delays 0–5 with rings of 4·d slots and
 /// more), which reaches `4·d − 3` above `retry_after + row_len + 1`.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "every outage, delay, row length and limit on two ring sizes: hours under Miri; runs natively in every CI run"
+)]
 fn relink_within_four_delays_when_the_outage_eats_refills() {
     let sets: (&[u16], &[u32], &[u32]) = (&[1, 3, 7], &[1, 3, 9], &[1, 3, 8, 30]);
     let mut worst = [0u64; 6];

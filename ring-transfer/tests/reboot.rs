@@ -111,6 +111,10 @@ fn check_clean<const N: usize>(row_len: u16, offset: u64, delay: u64, reboot_at:
 /// delays of 1–3 steps, a ring shorter and longer than a row (each longer than the round trip:
 /// a shorter one underruns whatever happens).
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "a reboot at each of 90 steps for 8 counter offsets and 3 delays (2 160 simulated runs): hours under Miri; runs natively in every CI run"
+)]
 fn a_reboot_at_every_step_resumes_where_the_board_stopped() {
     for offset in OFFSETS {
         for delay in 1..=3 {
@@ -125,6 +129,10 @@ fn a_reboot_at_every_step_resumes_where_the_board_stopped() {
 /// The case: the master's counter past 32 768 (40 000 items into the job), the board
 /// power-cycled. The board must be placed at 40 000 + what it consumed, not at 65 536.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "a simulated run of 40 400 steps: minutes under Miri; runs natively in every CI run"
+)]
 fn a_board_rebooted_after_half_the_counter_range_is_placed_where_it_stopped() {
     let sim: Sim<32> = run(10, 40_000, 1, 200, 400);
     sim.check_items();
@@ -148,6 +156,7 @@ proptest! {
     /// of a frame, `k` the frames lost meanwhile); it is linked again and the master says so;
     /// the reboot is counted; the session is the new board's.
     #[test]
+    #[cfg_attr(miri, ignore = "1 200 simulated steps of the ring per case: minutes under Miri, a simulated ring steps in tens of milliseconds under Miri; runs natively in every CI run")]
     fn a_reboot_on_a_faulty_link(
         seed in any::<u64>(),
         offset in prop::sample::select(OFFSETS.to_vec()),
@@ -222,6 +231,10 @@ fn run_clean<const N: usize>(sim: &mut Sim<N>, from: u64, steps: u64) {
 /// the wrap, and whether the late hello comes while the board is linked or while its hello's
 /// sync is still in flight.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "40 simulated runs of the ring (8 counter offsets, 5 delays): hours under Miri, a simulated ring steps in tens of milliseconds under Miri; runs natively in every CI run"
+)]
 fn a_late_hello_of_an_earlier_start_with_its_answer_lost_never_strands_the_board() {
     for offset in OFFSETS {
         for late_at in [3u64, 4, 5, 30, 100] {
@@ -264,6 +277,10 @@ fn a_late_hello_of_an_earlier_start_with_its_answer_lost_never_strands_the_board
 /// the board says hello, and is placed again within two round trips plus its report period —
 /// instead of being ignored for good.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "six simulated runs of the ring: minutes under Miri, a simulated ring steps in tens of milliseconds under Miri; runs natively in every CI run"
+)]
 fn a_master_that_took_an_earlier_start_for_the_session_re_offers_it() {
     for offset in [0u64, 32_500, 32_767, 40_000, 65_300, 65_535] {
         let delay = 2;

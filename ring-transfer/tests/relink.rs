@@ -107,6 +107,10 @@ fn configs() -> impl Iterator<Item = SlaveConfig> {
 /// (a ring shorter than the round trip underruns whatever the configuration): relinked
 /// within the bound after every outage.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "every configuration and delay after an outage (1 200 simulated runs): hours under Miri, a simulated ring steps in tens of milliseconds under Miri; runs natively in every CI run"
+)]
 fn every_configuration_relinks_after_an_outage() {
     let mut worst = 0;
     for (k, config) in configs().enumerate() {
@@ -128,6 +132,10 @@ fn every_configuration_relinks_after_an_outage() {
 /// failure. Every chance of a late frame and every jitter: the outage starts once the board is
 /// linked, and it relinks within the bound.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "a simulated run of the ring on a faulty link: minutes under Miri, a simulated ring steps in tens of milliseconds under Miri; runs natively in every CI run"
+)]
 fn a_board_the_faulty_link_put_stand_alone_before_the_outage() {
     for row_len in [34, 36] {
         for late in 0..200 {
@@ -151,6 +159,7 @@ proptest! {
     /// Any configuration (wider ranges), any moment of the outage, frames late by up to a few
     /// more steps before the master comes back.
     #[test]
+    #[cfg_attr(miri, ignore = "simulated runs of the ring with late frames per case: minutes under Miri, a simulated ring steps in tens of milliseconds under Miri; runs natively in every CI run")]
     fn relinks_with_late_frames(
         row_len in 1u16..40,
         retry_after in 1u32..40,

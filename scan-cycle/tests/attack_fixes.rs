@@ -261,6 +261,10 @@ fn seqs() -> Vec<Vec<Op>> {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "every sequence of operations at every point of three clocks: hours under Miri; runs natively in every CI run"
+)]
 fn every_op_sequence_at_every_point() {
     let mut fails = vec![];
     for t0 in [0u32, u32::MAX - 3500, (1 << 31) - 2500] {
@@ -954,6 +958,10 @@ fn a_halted_cycle_keeps_every_latched_pulse_it_read() {
 /// clock between): the executive's own watchdog never trips while the cycles are refused by
 /// `Signals` nor at any check after, before the first cycle has had the limit to run.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "every order of up to four of five events (781 runs), each against the model: minutes under Miri; runs natively in every CI run"
+)]
 fn check_watchdog_with_never_trips_on_a_signals_halt_in_any_order() {
     #[derive(Clone, Copy, Debug)]
     enum E {

@@ -176,6 +176,10 @@ proptest! {
 }
 
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "443 simulated days of a calendar, day by day: a minute under Miri; runs natively in every CI run"
+)]
 fn a_jump_longer_than_a_week_runs_each_line_once() {
     let lines = [
         Start {

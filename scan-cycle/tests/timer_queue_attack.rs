@@ -119,10 +119,10 @@ fn left_actions_come_first_on_the_next_tick_also_across_a_block() {
 proptest::proptest! {
     /// Any set of timers, any action panicking (caught): every other action still comes out,
     /// once, in the order of their deadlines and insertion, and the queue ends empty with every
-    /// place back.
+    /// place back. (Under Miri deadlines up to 300 ticks, not 700, so 400 ticks empty it.)
     #[test]
     fn a_panic_anywhere_loses_only_that_action(
-        delays in proptest::collection::vec(1u32..700, 1..40),
+        delays in proptest::collection::vec(1u32..if cfg!(miri) { 300 } else { 700 }, 1..40),
         panic_at in 0usize..40,
     ) {
         let mut q: TimerQueue<usize, 64> = TimerQueue::new();
@@ -135,7 +135,7 @@ proptest::proptest! {
         let victim = want.get(panic_at).copied();
         want.retain(|&k| Some(k) != victim);
         let (mut fired, mut panics) = (Vec::new(), 0usize);
-        for _ in 0..800 {
+        for _ in 0..if cfg!(miri) { 400 } else { 800 } {
             let caught = catch_unwind(AssertUnwindSafe(|| {
                 q.tick(|k| {
                     assert_ne!(Some(k), victim, "the operator code panics on this one");

@@ -189,7 +189,9 @@ mod tests {
     #[test]
     fn decode_all_8192_code_words() {
         let mut trolleys = 0;
-        for raw in 0u16..=CODE_MASK {
+        // Under Miri every 61st word (both parities, 135 words).
+        let step = if cfg!(miri) { 61 } else { 1 };
+        for raw in (0u16..=CODE_MASK).step_by(step) {
             let ones = (0..13).filter(|b| raw >> b & 1 == 1).count();
             let got = decode(raw);
             if raw == 0 {
@@ -203,7 +205,7 @@ mod tests {
                 trolleys += 1;
             }
         }
-        assert_eq!(trolleys, 4095);
+        assert!(trolleys == 4095 || (cfg!(miri) && trolleys > 0));
     }
 
     #[test]

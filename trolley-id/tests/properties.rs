@@ -28,6 +28,16 @@ fn reading(true_word: u16) -> impl proptest::strategy::Strategy<Value = u16> {
     ]
 }
 
+/// The longest sequence a property draws: `native`, and at most 40 under Miri, which interprets
+/// every step.
+const fn long(native: usize) -> usize {
+    if cfg!(miri) && native > 40 {
+        40
+    } else {
+        native
+    }
+}
+
 fn passage_readings() -> impl proptest::strategy::Strategy<Value = Vec<u16>> {
     (1u16..=4095).prop_flat_map(|n| {
         let word = encode(TrolleyId::new(n).unwrap());
@@ -170,7 +180,7 @@ proptest! {
     }
 
     #[test]
-    fn registry_matches_a_map(ops in prop::collection::vec((0u8..3, 1u16..=4095, any::<u8>()), 0..200)) {
+    fn registry_matches_a_map(ops in prop::collection::vec((0u8..3, 1u16..=4095, any::<u8>()), 0..long(200))) {
         let mut registry: Registry<u8> = Registry::new();
         let mut model: BTreeMap<u16, u8> = BTreeMap::new();
         for (op, n, dest) in ops {
@@ -194,7 +204,7 @@ proptest! {
     }
 
     #[test]
-    fn health_window_matches_recount(flags in prop::collection::vec((any::<bool>(), any::<bool>(), any::<bool>()), 0..300)) {
+    fn health_window_matches_recount(flags in prop::collection::vec((any::<bool>(), any::<bool>(), any::<bool>()), 0..long(300))) {
         const W: usize = 16;
         let limits = AlarmLimits { min_passages: 16, ..AlarmLimits::default() };
         let mut health: ReaderHealth<W> = ReaderHealth::new(limits).unwrap();
@@ -289,7 +299,7 @@ fn stream() -> impl proptest::strategy::Strategy<Value = Vec<(bool, bool)>> {
     // Runs of good passages with bursts of symptoms, so shares cross their limits both ways.
     prop::collection::vec(
         (prop::bool::weighted(0.1), prop::bool::weighted(0.05)),
-        0..600,
+        0..long(600),
     )
 }
 

@@ -1197,7 +1197,8 @@ mod tests {
             .min();
         assert_eq!(shortest, Some(SHORTEST_COMMAND));
         assert_eq!(SHORTEST_COMMAND, 11);
-        for function in 0..=31 {
+        // Under Miri every fifth function (0, 5, 10, …, 30): reads, writes and the others.
+        for function in (0..=31).step_by(if cfg!(miri) { 5 } else { 1 }) {
             let cmd = command(function);
             let mut buf = [0u8; MAX_MESSAGE];
             let n = cmd.encode(&mut buf).unwrap();

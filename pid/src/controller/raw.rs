@@ -373,11 +373,12 @@ mod tests {
         pid.step_general::<FEEDFORWARD>(r, y, feedforward, track)
     }
 
-    /// Cases from `PROPTEST_CASES` (256 unless set); four under Miri.
+    /// Cases from `PROPTEST_CASES` (256 unless set); two under Miri, whose runs are also
+    /// shorter (`RUN`).
     fn cases() -> ProptestConfig {
         let default = ProptestConfig::default();
         ProptestConfig {
-            cases: if cfg!(miri) { 4 } else { default.cases },
+            cases: if cfg!(miri) { 2 } else { default.cases },
             ..default
         }
     }
@@ -454,8 +455,12 @@ mod tests {
             (1, Just(Op::Auto).boxed()),
             (1, Just(Op::Reset).boxed()),
         ]);
-        prop::collection::vec(op, 1..120)
+        prop::collection::vec(op, 1..RUN * 2)
     }
+
+    /// The longest run of samples a property draws: 60 (operations: 120), 6 under Miri, which
+    /// interprets every fixed-point product of four types.
+    const RUN: usize = if cfg!(miri) { 6 } else { 60 };
 
     /// A value from raw bits and a shift: magnitudes from 0 to the type's ends, log-uniform
     /// (a shift of 32 or more in a 32-bit type lands near zero).
@@ -840,7 +845,7 @@ mod tests {
                         (any::<i64>(), 0..64u8, prop::option::of((any::<i64>(), 0..64u8))),
                     ),
                 ),
-                1..60,
+                1..RUN,
             ),
         ) {
             for result in [
