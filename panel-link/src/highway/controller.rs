@@ -649,6 +649,75 @@ mod tests {
     }
 
     #[test]
+    fn a_command_without_its_station_mark_is_not_run_even_with_good_parity_and_sum() {
+        let mut c = synced(ControllerConfig {
+            address: 7,
+            demand_repeat: 0,
+        });
+        let mut crate_ = Crate::default();
+        let mut cmd = encode(Message::Command {
+            crate_address: 7,
+            station: 2,
+            subaddress: 1,
+            function: 0,
+            data: None,
+        });
+        // The station byte without its mark, its row parity and the SUM made good again: only
+        // the mark says it is wrong (as `decode` says).
+        cmd[3] = with_parity(2);
+        cmd[4] = super::super::sum_byte(&cmd[..4]);
+        assert!(decode(&cmd).is_err());
+        let found = messages(&run(&mut c, &mut crate_, &cmd));
+        assert_eq!(
+            decode(&found[1]),
+            Ok(Message::Reply {
+                crate_address: 7,
+                status: Status {
+                    err: true,
+                    ..Status::default()
+                },
+                data: None
+            })
+        );
+        assert!(crate_.cycles.is_empty());
+        assert_eq!((c.stats().errors, c.stats().executed), (1, 0));
+    }
+
+    /// `demand_repeat`: while the graded LAM stays the same the demand goes out again every
+    /// `demand_repeat` byte clocks on an idle line, and with 0 only once.
+    #[test]
+    fn a_steady_lam_repeats_its_demand_every_demand_repeat_clocks() {
+        for repeat in [0, 1, 2, 50, 100] {
+            let mut c = synced(ControllerConfig {
+                address: 7,
+                demand_repeat: repeat,
+            });
+            let mut crate_ = Crate {
+                lam: 5,
+                ..Crate::default()
+            };
+            let mut at = Vec::new();
+            for clock in 0..1000u32 {
+                let before = c.stats().demands;
+                c.clock(WAIT, &mut crate_);
+                if c.stats().demands > before {
+                    at.push(clock);
+                }
+            }
+            if repeat == 0 {
+                assert_eq!(at, [0], "repeat 0: one demand");
+                continue;
+            }
+            // A demand takes 3 bytes of the line; the count starts when it is decided.
+            assert_eq!(at[0], 0, "repeat {repeat}");
+            for pair in at.windows(2) {
+                assert_eq!(pair[1] - pair[0], repeat.max(3), "repeat {repeat}: {at:?}");
+            }
+            assert_eq!(at.len() as u32, 1 + 999 / repeat.max(3), "repeat {repeat}");
+        }
+    }
+
+    #[test]
     fn a_corrupt_command_is_answered_with_err_and_not_run_then_derr() {
         let mut c = synced(ControllerConfig {
             address: 7,

@@ -636,6 +636,55 @@ mod tests {
     }
 
     #[test]
+    fn the_driver_sends_each_command_at_once_then_its_gap_and_nothing_else() {
+        // A write (the longest command) and then a read (shorter), on a line that answers
+        // nothing: byte for byte, the one WAIT a new driver starts with (controllers that start
+        // with it read nothing before a clean delimiter), the write, `gap` WAIT, the read, then
+        // WAIT until the time-out resends them: never a byte left over in the buffer from the
+        // longer message.
+        let gap = 2;
+        let mut config = DriverConfig {
+            gap,
+            ..DriverConfig::for_loop(1)
+        };
+        config.timeout = config.least_timeout();
+        let mut d: Driver<2> = Driver::new(config).unwrap();
+        let write = Message::Command {
+            crate_address: 3,
+            station: 1,
+            subaddress: 0,
+            function: 16,
+            data: Some(0xABCDEF),
+        };
+        let read = Message::Command {
+            crate_address: 4,
+            station: 1,
+            subaddress: 0,
+            function: 0,
+            data: None,
+        };
+        let bytes = |m: Message| {
+            let mut buf = [0u8; MAX_MESSAGE];
+            let len = m.encode(&mut buf).unwrap();
+            buf[..len].to_vec()
+        };
+        d.submit(write).unwrap();
+        d.submit(read).unwrap();
+        let mut expected = std::vec![WAIT];
+        expected.extend(bytes(write));
+        expected.extend([WAIT; 2]);
+        expected.extend(bytes(read));
+        let sent: std::vec::Vec<u8> = (0..config.timeout)
+            .map(|_| d.clock(WAIT).transmit)
+            .collect();
+        assert_eq!(sent[..expected.len()], expected[..]);
+        assert!(
+            sent[expected.len()..].iter().all(|&b| b == WAIT),
+            "after the read only WAIT until the time-out: {sent:02X?}"
+        );
+    }
+
+    #[test]
     fn a_loop_of_three_crates_answers_every_command() {
         let mut d: Driver<3> = Driver::new(DriverConfig::default()).unwrap();
         let mut crates: std::vec::Vec<Controller> = (1..=3)
