@@ -173,6 +173,10 @@ fn cycle_firing(
 /// halt unless the interrupt came after the cycle had committed its outputs (then the next
 /// cycle is refused).
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "a trip and a power failure at every moment of a cycle: a minute interpreted; runs natively in every CI run"
+)]
 fn a_trip_or_power_failure_at_every_moment_of_a_cycle_leaves_the_safe_outputs() {
     for interrupt in [
         Interrupt::Trip,
@@ -584,6 +588,10 @@ proptest! {
     /// or more ahead (behind) adds none; the next reading counts from the reference if it is
     /// forward of it, else from the behind reading if forward of that (a new base).
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "clock step sequences against a model: a minute interpreted; runs natively in every CI run"
+    )]
     fn the_program_clock_counts_forward_steps_only(start in any::<u32>(), steps in clock_steps()) {
         let mut io = bench();
         io.t = start;

@@ -47,6 +47,10 @@ struct Naive {
 
 proptest! {
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "up to 80 timer operations a case against a list: minutes interpreted; runs natively in every CI run"
+    )]
     fn timer_queue_matches_a_naive_list(ops in prop::collection::vec(op(), 1..80)) {
         const N: usize = 16;
         let mut queue: TimerQueue<u32, N> = TimerQueue::new();
@@ -243,6 +247,10 @@ mod images {
         /// inputs with forced points replaced, and the plant gets the program's outputs with
         /// forced points replaced; points outside the images are refused.
         #[test]
+        #[cfg_attr(
+            miri,
+            ignore = "up to 60 image and forcing operations a case against a model: over a minute interpreted; runs natively in every CI run"
+        )]
         fn images_and_forcing_match_a_model(ops in prop::collection::vec(op(), 1..60)) {
             let mut plc: Executive<2, 2> = Executive::new(CycleConfig::source());
             let mut io = Raw { inputs: [0; 2], outputs: [0; 2] };
@@ -305,6 +313,10 @@ mod debounce {
         /// The bit-sliced debounce and latch against a per-input counter model, with counts
         /// changed mid-count and latched pulses captured between cycles.
         #[test]
+        #[cfg_attr(
+            miri,
+            ignore = "a per-input counter model over long input runs: minutes interpreted; runs natively in every CI run"
+        )]
         fn conditioning_matches_a_per_input_counter(
             ks in prop::collection::vec(1u8..=15, 32),
             latched in any::<u32>(),

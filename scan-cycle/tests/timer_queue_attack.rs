@@ -85,6 +85,10 @@ fn unknown_timer_says_what_happened_without_debug_text() {
 /// the next tick starts a new block of 256 (and timers come down from the higher levels into
 /// it), and every handle keeps working on them.
 #[test]
+#[cfg_attr(
+    miri,
+    ignore = "a block of 256 ticks and more: minutes interpreted; runs natively in every CI run"
+)]
 fn left_actions_come_first_on_the_next_tick_also_across_a_block() {
     for due in [5u32, 255, 256 * 256 - 1] {
         let mut q: TimerQueue<u32, 8> = TimerQueue::new();
@@ -121,6 +125,10 @@ proptest::proptest! {
     /// once, in the order of their deadlines and insertion, and the queue ends empty with every
     /// place back. (Under Miri deadlines up to 300 ticks, not 700, so 400 ticks empty it.)
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "hundreds of ticks with a panic caught at each: minutes interpreted; runs natively in every CI run"
+    )]
     fn a_panic_anywhere_loses_only_that_action(
         delays in proptest::collection::vec(1u32..if cfg!(miri) { 300 } else { 700 }, 1..40),
         panic_at in 0usize..40,
