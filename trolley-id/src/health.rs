@@ -197,8 +197,7 @@ pub enum AlarmChange {
 ///     min_passages: 100,
 /// }) {
 ///     Ok(h) => h,
-///     // ok: a panic in a const is the compile-time refusal this example shows
-///     Err(_) => panic!("min_passages above the window"),
+///     Err(_) => panic!("min_passages above the window"), // ok: in a const, the compile-time refusal shown
 /// };
 /// # let _ = HEALTH;
 /// ```

@@ -672,7 +672,7 @@ mod tests {
         d.submit(read).unwrap();
         let mut expected = std::vec![WAIT];
         expected.extend(bytes(write));
-        expected.extend([WAIT; 2]);
+        expected.extend(core::iter::repeat_n(WAIT, usize::from(gap)));
         expected.extend(bytes(read));
         let sent: std::vec::Vec<u8> = (0..config.timeout)
             .map(|_| d.clock(WAIT).transmit)
