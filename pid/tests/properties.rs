@@ -148,12 +148,12 @@ fn config() -> impl Strategy<Value = Config> {
         )
 }
 
+/// The longest run of samples a case draws: 200, under Miri 20 (one case of 200 samples took
+/// about 30 s interpreted).
+const LONG: usize = if cfg!(miri) { 20 } else { 200 };
+
 fn signal() -> impl Strategy<Value = Vec<(f64, f64)>> {
-    // Under Miri up to 20 samples.
-    prop::collection::vec(
-        (-100.0f64..100.0, -100.0f64..100.0),
-        1..if cfg!(miri) { 20 } else { 200 },
-    )
+    prop::collection::vec((-100.0f64..100.0, -100.0f64..100.0), 1..LONG)
 }
 
 /// A reading as a broken or unready sensor gives it, or a sane one.
@@ -201,8 +201,8 @@ proptest! {
     #[test]
     fn non_finite_samples_leave_no_trace(
         config in config(),
-        inputs in prop::collection::vec((sane_or_missing(), sane_or_missing()), 1..200),
-        reset_at in prop::option::of(0usize..200),
+        inputs in prop::collection::vec((sane_or_missing(), sane_or_missing()), 1..LONG),
+        reset_at in prop::option::of(0usize..LONG),
     ) {
         let mut pid = Pid::<f64>::new(&config).unwrap();
         let mut reference = Reference::new(config);
@@ -228,7 +228,7 @@ proptest! {
     #[test]
     fn output_within_limits_rate_limited_and_finite(
         config in config(),
-        inputs in prop::collection::vec((any::<f32>(), any::<f32>()), 1..200),
+        inputs in prop::collection::vec((any::<f32>(), any::<f32>()), 1..LONG),
     ) {
         let mut pid = Pid::<f32>::new(&config).unwrap();
         let (lo, hi) = (config.ymin as f32, config.ymax as f32);
@@ -253,7 +253,7 @@ proptest! {
     #[test]
     fn recovers_after_anything(
         configs in prop::collection::vec(config(), 1..4),
-        events in prop::collection::vec((0u8..8, reading(), reading(), 0usize..4), 0..120),
+        events in prop::collection::vec((0u8..8, reading(), reading(), 0usize..4), 0..LONG * 3 / 5),
     ) {
         let mut pid = Pid::<f64>::new(&configs[0]).unwrap();
         let mut current = configs[0];
@@ -311,7 +311,7 @@ proptest! {
     fn the_bias_of_a_kind_without_i_never_moves(
         config in config().prop_filter("no I", |c| !c.kind.has_i()),
         manual_output in -100.0f64..100.0,
-        samples in prop::collection::vec((reading(), reading(), reading()), 1..100),
+        samples in prop::collection::vec((reading(), reading(), reading()), 1..LONG / 2),
     ) {
         let mut pid = Pid::<f64>::new(&config).unwrap();
         pid.update(1.0, 0.0);

@@ -99,12 +99,16 @@ fn refused_for_reach<T: Scalar>(config: Config<f64>, m: f64) -> Option<bool> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 4 } else { 2000 }))]
+    #![proptest_config(ProptestConfig::with_cases(if cfg!(miri) { 1 } else { 2000 }))]
 
     /// README: "a PI on a scale 0..M ... is accepted exactly when max(M, v, R) ≤ L"
     /// (outside a 10⁻⁶ band around L, where rounding decides), in I16F16 and I32F32; `f32`
     /// and `f64` stations accept all of them.
     #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "four stations of four types per case, drawn until one is off the limit's rounding band (33 s for one case interpreted): the closed form is plain f64 arithmetic, and the_worked_examples_hold builds fixed-point stations under Miri; runs natively in every CI run"
+    )]
     fn a_fixed_point_station_accepts_a_pi_exactly_when_the_closed_form_fits((config, m) in pi()) {
         for (got, l) in [
             (refused_for_reach::<I16F16>(config, m), limit::<I16F16>()),
