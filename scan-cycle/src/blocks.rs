@@ -870,6 +870,71 @@ mod tests {
         assert_eq!(ud.call(false, false, true, true), (false, true)); // reset wins over load
     }
 
+    /// CTD and CTUD against a model written from IEC 61131-3's text, over every sequence of
+    /// four calls (every combination of CU, CD, R and LD on each) for presets around 0, then a
+    /// new preset: LD loads the new one, and CTUD's QU compares with it at once.
+    #[test]
+    fn down_and_up_down_counters_match_the_standard_over_every_short_sequence() {
+        let steps = if cfg!(miri) { 2 } else { 4 };
+        for pv in [-1, 0, 1, 2] {
+            for seq in 0..16u32.pow(steps) {
+                let mut ctd = Ctd::new(pv);
+                let mut ctud = Ctud::new(pv);
+                // The model: CV, and the last CU and CD seen (edges are rising ones).
+                let (mut down_cv, mut down_last) = (0i32, false);
+                let (mut cv, mut last_cu, mut last_cd) = (0i32, false, false);
+                for step in 0..steps {
+                    let bits = seq / 16u32.pow(step) % 16;
+                    let (cu, cd, r, ld) =
+                        (bits & 1 != 0, bits & 2 != 0, bits & 4 != 0, bits & 8 != 0);
+                    let (up_edge, down_edge) = (cu && !last_cu, cd && !last_cd);
+                    (last_cu, last_cd) = (cu, cd);
+                    if r {
+                        cv = 0;
+                    } else if ld {
+                        cv = pv;
+                    } else if up_edge && !down_edge {
+                        cv += 1;
+                    } else if down_edge && !up_edge {
+                        cv -= 1;
+                    }
+                    let got = ctud.call(cu, cd, r, ld);
+                    assert_eq!(
+                        got,
+                        (cv >= pv, cv <= 0),
+                        "CTUD pv {pv} seq {seq:x} step {step}"
+                    );
+                    assert_eq!(ctud.cv(), cv, "CTUD pv {pv} seq {seq:x} step {step}");
+
+                    let down = cd && !down_last;
+                    down_last = cd;
+                    if ld {
+                        down_cv = pv;
+                    } else if down {
+                        down_cv -= 1;
+                    }
+                    assert_eq!(
+                        ctd.call(cd, ld),
+                        down_cv <= 0,
+                        "CTD pv {pv} seq {seq:x} step {step}"
+                    );
+                    assert_eq!(ctd.cv(), down_cv, "CTD pv {pv} seq {seq:x} step {step}");
+                }
+                // A new preset: CTUD's QU follows it at the next call, LD loads it.
+                ctud.set_pv(cv + 1);
+                assert_eq!(ctud.call(false, false, false, false), (false, cv <= 0));
+                ctud.set_pv(cv);
+                assert_eq!(ctud.call(false, false, false, false), (true, cv <= 0));
+                ctud.set_pv(7);
+                assert_eq!(ctud.call(false, false, false, true), (true, false));
+                assert_eq!(ctud.cv(), 7);
+                ctd.set_pv(9);
+                assert!(!ctd.call(false, true));
+                assert_eq!(ctd.cv(), 9);
+            }
+        }
+    }
+
     #[test]
     fn counters_saturate() {
         let mut up = Ctu::new(0);

@@ -810,6 +810,28 @@ mod tests {
     }
 
     #[test]
+    fn add_errors_say_what_was_wrong() {
+        let at = |hour, minute| Start {
+            hour,
+            minute,
+            days: Weekdays::ALL,
+            program: 0u8,
+        };
+        assert_eq!(
+            AddError::Full(at(7, 3)).to_string(),
+            "the minute table is full"
+        );
+        assert_eq!(
+            AddError::InvalidTime(at(24, 5)).to_string(),
+            "no such time of day: 24:05 (hours 0-23, minutes 0-59)"
+        );
+        assert_eq!(
+            AddError::InvalidTime(at(6, 60)).to_string(),
+            "no such time of day: 06:60 (hours 0-23, minutes 0-59)"
+        );
+    }
+
+    #[test]
     fn weekdays_and_iso_weeks() {
         let d = |y, m, dd| DateTime::new(y, m, dd, 0, 0, 0).unwrap();
         assert_eq!(d(1977, 5, 2).weekday(), 1); // a Monday

@@ -1290,6 +1290,54 @@ mod tests {
     }
 
     #[test]
+    fn halts_and_breakpoint_errors_say_what_happened() {
+        use std::string::ToString;
+        assert_eq!(
+            Halt::PowerFail.to_string(),
+            "power failure: outputs safe, state frozen"
+        );
+        assert_eq!(Halt::Watchdog.to_string(), "watchdog tripped: outputs safe");
+        for (b, text) in [
+            (Breakpoint::Cycle(12), "cycle 12"),
+            (Breakpoint::InputOn(3), "input 3 came on"),
+            (Breakpoint::OutputOn(4), "output 4 came on"),
+            (Breakpoint::OutputOff(5), "output 5 went off"),
+        ] {
+            assert_eq!(b.to_string(), text);
+            assert_eq!(
+                Halt::Breakpoint(b).to_string(),
+                std::format!("breakpoint reached: {text}")
+            );
+        }
+        for (e, text) in [
+            (
+                BreakpointError::CycleZero,
+                "breakpoint at cycle 0 can never fire: cycles are numbered from 1",
+            ),
+            (
+                BreakpointError::CyclePassed { cycle: 7, count: 9 },
+                "breakpoint at cycle 7 can never fire: 9 cycles have run already",
+            ),
+            (
+                BreakpointError::NoSuchInput {
+                    point: 32,
+                    inputs: 32,
+                },
+                "breakpoint on input 32 can never fire: there are 32 inputs (0 to 31)",
+            ),
+            (
+                BreakpointError::NoSuchOutput {
+                    point: 16,
+                    outputs: 16,
+                },
+                "breakpoint on output 16 can never fire: there are 16 outputs (0 to 15)",
+            ),
+        ] {
+            assert_eq!(e.to_string(), text);
+        }
+    }
+
+    #[test]
     fn program_sees_images_only_and_outputs_swap() {
         let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(CycleConfig::source()));
         io.inputs = [0b1, 0];
