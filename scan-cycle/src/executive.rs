@@ -1426,6 +1426,7 @@ mod tests {
             }),
         );
         plc.cycle(&mut io, |_| {}).unwrap();
+        assert_eq!(plc.stats().overruns, 0, "busy 1 ms of a 10 ms period");
         io.step_us = 20_000; // a slow cycle: busy 20 ms > 10 ms period
         plc.cycle(&mut io, |_| {}).unwrap();
         let s = *plc.stats();
@@ -1433,14 +1434,30 @@ mod tests {
             (s.cycles, s.overruns, s.min_us, s.max_us),
             (2, 1, 1000, 20_000)
         );
+        // Busy exactly the period is an overrun too: no time is left for the reserve.
+        io.step_us = 10_000;
+        plc.cycle(&mut io, |_| {}).unwrap();
+        assert_eq!(plc.stats().overruns, 2);
+        plc = Executive::<2, 1>::new(CycleConfig {
+            period_us: 10_000,
+            ..CycleConfig::source()
+        });
+        io.step_us = 1000;
+        plc.cycle(&mut io, |_| {}).unwrap();
+        io.step_us = 20_000;
+        plc.cycle(&mut io, |_| {}).unwrap();
+        let s = *plc.stats();
         assert_eq!(s.mean_us(), 10_500);
         assert_eq!(s.load_per_mille(10_000), 1050);
         io.step_us = 1000;
         plc.cycle(&mut io, |_| {}).unwrap();
         let mut spool: Spool<u32, 8> = Spool::new();
+        assert!(spool.is_empty());
         for j in 0..8 {
             spool.push(j).unwrap();
+            assert!(!spool.is_empty());
         }
+        assert_eq!(spool.push(8), Err(8), "a full spool hands the job back");
         let mut ran = Vec::new();
         // 1 ms per clock read: the reserve before the 10 ms period (less 3 ms margin) fits 5 jobs.
         let n = plc.reserve(&mut io, &mut spool, 3_000, |j| ran.push(j));
@@ -1448,6 +1465,75 @@ mod tests {
         assert!((1..8).contains(&n), "{n}");
         assert_eq!(ran, (0..n as u32).collect::<Vec<_>>());
         assert_eq!(spool.len(), 8 - n);
+    }
+
+    #[test]
+    fn a_step_chain_runs_the_steps_whose_test_holds_in_order() {
+        let mut chain: StepChain<Vec<u8>, 2, 1, 3> = StepChain::new();
+        assert!(chain.is_empty());
+        assert_eq!(chain.len(), 0);
+        // Step 1 sets output 0 when input 0 is on; step 2 tests that output (so it sees step
+        // 1's write in the same cycle); step 3 tests input 1.
+        assert!(
+            chain
+                .push(
+                    |s| s.inputs.get(0),
+                    |s, ran| {
+                        s.outputs.set(0, true).ok();
+                        ran.push(1);
+                    }
+                )
+                .is_ok()
+        );
+        assert!(
+            chain
+                .push(|s| s.outputs.get(0), |_, ran| ran.push(2))
+                .is_ok()
+        );
+        assert!(
+            chain
+                .push(|s| s.inputs.get(1), |_, ran| ran.push(3))
+                .is_ok()
+        );
+        assert_eq!((chain.len(), chain.is_empty()), (3, false));
+        assert!(chain.push(|_| true, |_, ran| ran.push(4)).is_err(), "full");
+        assert_eq!(chain.len(), 3);
+        let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(CycleConfig::source()));
+        let mut ran = Vec::new();
+        for (inputs, want) in [
+            (0b00, &[][..]),
+            (0b01, &[1, 2][..]),
+            (0b10, &[3][..]),
+            (0b11, &[1, 2, 3][..]),
+        ] {
+            io.inputs = [inputs, 0];
+            ran.clear();
+            plc.cycle(&mut io, |scan| {
+                scan.outputs.set(0, false).ok();
+                chain.run(scan, &mut ran);
+            })
+            .unwrap();
+            assert_eq!(ran, want, "inputs {inputs:02b}");
+        }
+    }
+
+    #[test]
+    fn every_watchdog_trip_is_counted() {
+        let (mut io, mut plc) = (sim(), Executive::<2, 1>::new(CycleConfig::source()));
+        assert_eq!(plc.watchdog_trips(), 0);
+        for trips in 1..=2 {
+            plc.cycle(&mut io, |_| {}).unwrap();
+            io.step_us = 150_000; // past the 100 ms watchdog
+            assert!(plc.check_watchdog(&mut io));
+            assert_eq!(plc.watchdog_trips(), trips);
+            assert!(
+                plc.check_watchdog(&mut io),
+                "still tripped: not counted again"
+            );
+            assert_eq!(plc.watchdog_trips(), trips);
+            plc.reset_watchdog();
+            io.step_us = 1000;
+        }
     }
 
     #[test]
