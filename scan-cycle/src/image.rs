@@ -557,7 +557,9 @@ mod tests {
     #[test]
     fn forcing_wins_and_is_visible() {
         let mut f: Forcing<2> = Forcing::new();
+        assert!(!f.any());
         f.force(3, true).unwrap();
+        assert!(f.any());
         f.force(17, false).unwrap();
         let mut img = Image::from_words([0, 0xFFFF]);
         f.apply(&mut img);
@@ -566,7 +568,21 @@ mod tests {
         assert_eq!(f.iter().collect::<Vec<_>>(), [(3, true), (17, false)]);
         f.unforce(3).unwrap();
         assert_eq!(f.forced(3), None);
-        assert!(f.force(32, true).is_err());
+        assert!(f.any(), "point 17 is still forced");
+        f.unforce(17).unwrap();
+        assert!(!f.any());
+        let e = f.force(32, true).unwrap_err();
+        assert_eq!(
+            e,
+            PointError {
+                point: 32,
+                points: 32
+            }
+        );
+        assert_eq!(
+            e.to_string(),
+            "I/O point 32 is outside the image of 32 points"
+        );
     }
 
     #[test]

@@ -315,3 +315,17 @@ impl<const IW: usize, const OW: usize> core::fmt::Debug for Signals<IW, OW> {
             .finish_non_exhaustive()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn debug_text_shows_the_state() {
+        let signals: Signals<1, 1> = Signals::new(&CycleConfig::source());
+        assert_eq!(
+            std::format!("{signals:?}"),
+            "Signals { tripped: false, power_failed: false, trips: 0, watchdog_us: 100000, .. }"
+        );
+    }
+}

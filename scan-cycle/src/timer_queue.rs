@@ -628,6 +628,23 @@ mod tests {
     }
 
     #[test]
+    fn a_full_queue_says_so_and_is_empty_follows_the_timers() {
+        let mut q: TimerQueue<u32, 2> = TimerQueue::new();
+        assert!(q.is_empty());
+        q.insert(5, 1).unwrap();
+        assert!(!q.is_empty());
+        q.insert(5, 2).unwrap();
+        let full = q.insert(5, 3).unwrap_err();
+        assert_eq!(full, QueueFull(3));
+        assert_eq!(
+            full.to_string(),
+            "timer queue full: no room for another timer"
+        );
+        assert_eq!(drain(&mut q, 5), [(5, 1), (5, 2)]);
+        assert!(q.is_empty());
+    }
+
+    #[test]
     fn expires_on_the_kth_tick_zero_as_one() {
         let mut q: TimerQueue<u32, 8> = TimerQueue::new();
         q.insert(3, 3).unwrap();
