@@ -809,6 +809,15 @@ mod tests {
         assert_eq!(full.into_start().program, 3);
     }
 
+    /// The milliseconds a stored clock may hold (restored through `checked`): 0 to 999.
+    #[test]
+    fn stored_milliseconds_stop_at_999() {
+        let at = |ms| DateTime::checked(2026, 1, 1, 0, 0, 0, ms);
+        assert_eq!(at(999).map(|t| t.millis), Ok(999));
+        assert_eq!(at(1000), Err(InvalidDateTime::Millis(1000)));
+        assert_eq!(at(u16::MAX), Err(InvalidDateTime::Millis(u16::MAX)));
+    }
+
     #[test]
     fn add_errors_say_what_was_wrong() {
         let at = |hour, minute| Start {

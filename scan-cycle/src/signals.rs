@@ -320,6 +320,32 @@ impl<const IW: usize, const OW: usize> core::fmt::Debug for Signals<IW, OW> {
 mod tests {
     use super::*;
 
+    /// A tripped watchdog is not tripped again, and a power failure is not a hang: neither is
+    /// counted as another trip however long the checks go on.
+    #[test]
+    fn no_trip_while_tripped_or_while_the_power_is_off() {
+        let signals: Signals<1, 1> = Signals::new(&CycleConfig::source());
+        assert!(!signals.check_watchdog(0));
+        assert!(signals.check_watchdog(150_000), "past the 100 ms limit");
+        assert_eq!(signals.trips(), 1);
+        assert!(
+            !signals.check_watchdog(300_000),
+            "already tripped: not a new trip"
+        );
+        assert_eq!((signals.trips(), signals.tripped()), (1, true));
+
+        let signals: Signals<1, 1> = Signals::new(&CycleConfig::source());
+        assert!(!signals.check_watchdog(0));
+        signals.power_fail();
+        for now in [50_000, 150_000, 1_000_000] {
+            assert!(
+                !signals.check_watchdog(now),
+                "an outage is not a hang ({now} µs)"
+            );
+        }
+        assert_eq!((signals.trips(), signals.tripped()), (0, false));
+    }
+
     #[test]
     fn debug_text_shows_the_state() {
         let signals: Signals<1, 1> = Signals::new(&CycleConfig::source());
