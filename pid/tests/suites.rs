@@ -1,0 +1,17 @@
+//! The integration suites of `regler-pid`, one module per file beside this one, built as a
+//! single test binary (`autotests = false` in Cargo.toml): one crate to compile and link
+//! instead of one per file. `cargo test -p regler-pid --test suites reach::` runs one suite.
+
+mod actuator;
+mod attack2_fixes;
+mod attack3_fixes;
+mod attack_regressions;
+mod bad_inputs;
+mod load_step;
+mod operator;
+mod properties;
+mod reach;
+mod reach_model;
+mod scaling;
+mod serde;
+mod tuning;
