@@ -269,8 +269,11 @@ impl<const W: usize> Forcing<W> {
 /// `Conditioning<W>` is 11 images of `W` words: `22·W` bytes.
 ///
 /// Deserializing checks that every point's debounce count is 1..=15 (a stored count of 0, a
-/// corrupt block, is an error, not an input that never debounces) and that no latched point is
-/// debounced.
+/// corrupt block, is an error, not an input that never debounces), that no latched point is
+/// debounced, that no counter holds 15 readings (counters stop at 14) and that no pulse is
+/// captured on a point that is not latched. So a restored debounced input with count k changes
+/// after at most k consecutive differing readings — after k − c when it had counted c of them,
+/// and at the first when c ≥ k — as it would have without the power failure.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -325,6 +328,20 @@ impl<const W: usize> TryFrom<RawConditioning<W>> for Conditioning<W> {
                     | u8::from(d >> bit & 1 == 1) << 3;
                 return Err(DebounceError::Latched { point, count });
             }
+            // A counter of 15 is never stored: a count is at most 15 and a counter is cleared
+            // the cycle it reaches its point's count, so counters stop at 14. Restored, 15 would
+            // wrap to 0 at the next differing reading and the input would wait its whole count
+            // again.
+            let [c0, c1, c2, c3] = &raw.counters;
+            let full = c0.words.get(w).copied().unwrap_or(0)
+                & c1.words.get(w).copied().unwrap_or(0)
+                & c2.words.get(w).copied().unwrap_or(0)
+                & c3.words.get(w).copied().unwrap_or(0);
+            if full != 0 {
+                let bit = usize::try_from(full.trailing_zeros()).unwrap_or(0);
+                let point = w.saturating_mul(POINTS_PER_WORD).saturating_add(bit);
+                return Err(DebounceError::StoredCounter { point });
+            }
             // A pending pulse exists only on a latched point: one elsewhere would read as a
             // phantom input for a cycle.
             let pending = raw.pending.words.get(w).copied().unwrap_or(0);
@@ -376,6 +393,14 @@ pub enum DebounceError {
         /// The debounce count it has or was to get (above 1).
         count: u8,
     },
+    /// Stored conditioning (deserialized) holds a debounce counter of 15 readings on a point, a
+    /// state the conditioning never reaches (a counter is cleared the cycle it reaches the
+    /// point's count, at most 15, so counters stop at 14): restored, it would wrap to 0 and the
+    /// input would wait its whole count again.
+    StoredCounter {
+        /// The point.
+        point: usize,
+    },
     /// Stored conditioning (deserialized) holds a captured pulse on a point that is not
     /// latched: it would read as a phantom input for one cycle.
     PendingNotLatched {
@@ -397,6 +422,11 @@ impl fmt::Display for DebounceError {
                 f,
                 "point {point} cannot be latched and debounced (count {count}) at once: \
                  a latch keeps pulses a debounce would drop; latched points keep count 1"
+            ),
+            DebounceError::StoredCounter { point } => write!(
+                f,
+                "stored conditioning holds a debounce counter of 15 readings on point {point}: \
+                 counters stop at 14"
             ),
             DebounceError::PendingNotLatched { point } => write!(
                 f,

@@ -119,6 +119,75 @@ fn bad_stored_state_is_refused() {
     }
 }
 
+/// The root docs of `Conditioning`: "a restored debounced input with count k changes after at
+/// most k consecutive differing readings — after k − c when it had counted c of them, and at the
+/// first when c ≥ k"; a stored counter of 15, which the conditioning never holds, is refused.
+/// Every point of a two-word image, every count 1..=15, every stored counter 0..=15, the input
+/// stored off and on. (Before the restore refused it, a counter of 15 wrapped to 0 and the
+/// input waited k more readings: 16 for count 15.)
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "15 360 stored states through serde_json, 16 cycles each: minutes interpreted; runs natively in every CI run"
+)]
+fn a_restored_counter_finishes_its_count_and_15_is_refused() {
+    for point in 0..32usize {
+        let (w, bit) = (point / 16, point % 16);
+        for k in 1..=15u8 {
+            for counter in 0..=15u16 {
+                for stored_on in [false, true] {
+                    let mut c: Conditioning<2> = Conditioning::new();
+                    c.set_debounce(point, k).unwrap();
+                    let mut value = serde_json::to_value(c).unwrap();
+                    if stored_on {
+                        value["stable"]["words"][w] = serde_json::json!(1u16 << bit);
+                    }
+                    for plane in 0..4 {
+                        if counter >> plane & 1 == 1 {
+                            value["counters"][plane]["words"][w] = serde_json::json!(1u16 << bit);
+                        }
+                    }
+                    let restored = serde_json::from_value::<Conditioning<2>>(value);
+                    if counter == 15 {
+                        let err = restored.unwrap_err().to_string();
+                        assert!(
+                            err.contains(&format!(
+                                "debounce counter of 15 readings on point {point}"
+                            )),
+                            "{err}"
+                        );
+                        continue;
+                    }
+                    let mut restored = restored.unwrap();
+                    // The reading differs from the stored value at `point` only.
+                    let mut reading = [0u16; 2];
+                    if !stored_on {
+                        reading[w] = 1 << bit;
+                    }
+                    let want = usize::from(k.saturating_sub(u8::try_from(counter).unwrap()).max(1));
+                    let mut out = Image::<2>::new();
+                    for n in 1..=16 {
+                        restored.condition(&reading, &mut out);
+                        for p in 0..32 {
+                            let expect = if p == point {
+                                (n >= want) != stored_on
+                            } else {
+                                false
+                            };
+                            assert_eq!(
+                                out.get(p),
+                                expect,
+                                "point {point}, count {k}, stored counter {counter}, stored \
+                                 {stored_on}: point {p} after {n} readings"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// A stored timer in a state no sequence of calls leaves it in is refused, naming what is wrong
 /// (found by the fuzz target `scan-cycle/fuzz/fuzz_targets/snapshot.rs`: a TON stored with Q on
 /// and not finished was on at once, before PT; a TP stored with Q on and no pulse running gave
