@@ -260,6 +260,7 @@ impl core::error::Error for StoredTimerError {}
 /// in by each.
 #[cfg(feature = "serde")]
 #[derive(serde::Deserialize)]
+#[serde(expecting = "struct Ton or Tof")] // what serde's messages name
 struct RawTimer {
     pt_ms: u32,
     running: Option<Elapsed>,
@@ -304,6 +305,7 @@ impl TryFrom<RawTimer> for Tof {
 /// The stored form of a [`Tp`], checked on the way in.
 #[cfg(feature = "serde")]
 #[derive(serde::Deserialize)]
+#[serde(expecting = "struct Tp")] // what serde's messages name
 struct RawTp {
     pt_ms: u32,
     running: Option<Elapsed>,

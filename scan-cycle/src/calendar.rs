@@ -70,6 +70,7 @@ impl core::error::Error for InvalidDateTime {}
 /// The stored form of a [`DateTime`], checked on the way in.
 #[cfg(feature = "serde")]
 #[derive(serde::Deserialize)]
+#[serde(expecting = "struct DateTime")] // what serde's messages name
 struct RawDateTime {
     year: u16,
     month: u8,

@@ -286,9 +286,11 @@ pub struct Conditioning<const W: usize> {
     thresholds: [Image<W>; 4],
 }
 
-/// The stored form of a [`Conditioning`], checked on the way in.
+/// The stored form of a [`Conditioning`], checked on the way in (serde's messages name
+/// `Conditioning`: a user reads "expected struct Conditioning").
 #[cfg(feature = "serde")]
 #[derive(serde::Deserialize)]
+#[serde(expecting = "struct Conditioning")]
 struct RawConditioning<const W: usize> {
     latched: Image<W>,
     pending: Image<W>,

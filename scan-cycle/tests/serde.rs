@@ -119,6 +119,39 @@ fn bad_stored_state_is_refused() {
     }
 }
 
+/// A block that is not a block at all is refused with a message naming the type the user
+/// stores, not a private stored form.
+#[test]
+fn a_refused_block_names_the_type_stored() {
+    let err = |e: serde_json::Error| e.to_string();
+    let messages = [
+        (
+            err(serde_json::from_str::<Conditioning<2>>("null").unwrap_err()),
+            "struct Conditioning",
+        ),
+        (
+            err(serde_json::from_str::<DateTime>("null").unwrap_err()),
+            "struct DateTime",
+        ),
+        (
+            err(serde_json::from_str::<Ton>("null").unwrap_err()),
+            "struct Ton or Tof",
+        ),
+        (
+            err(serde_json::from_str::<Tof>("null").unwrap_err()),
+            "struct Ton or Tof",
+        ),
+        (
+            err(serde_json::from_str::<Tp>("null").unwrap_err()),
+            "struct Tp",
+        ),
+    ];
+    for (message, want) in messages {
+        assert!(message.contains(want), "{message}");
+        assert!(!message.contains("Raw"), "{message}");
+    }
+}
+
 /// The root docs of `Conditioning`: "a restored debounced input with count k changes after at
 /// most k consecutive differing readings — after k − c when it had counted c of them, and at the
 /// first when c ≥ k"; a stored counter of 15, which the conditioning never holds, is refused.
