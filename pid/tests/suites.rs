@@ -3,6 +3,7 @@
 //! instead of one per file. `cargo test -p regler-pid --test suites reach::` runs one suite.
 
 mod actuator;
+mod actuator_exact;
 mod attack2_fixes;
 mod attack3_fixes;
 mod attack_regressions;

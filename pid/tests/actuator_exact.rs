@@ -1,0 +1,271 @@
+//! The three-point driver's documented edges, in exact (dyadic) arithmetic, where a tolerance
+//! would hide a wrong comparison or a wrong sign: an error of exactly the smallest move is
+//! driven; the estimate reads the exact travel, correctly rounded, even when each sample's
+//! travel is below half an ulp of it; a request in the velocity form is driven to the last
+//! sample, none lost and none added.
+#![allow(
+    clippy::unwrap_used,
+    clippy::float_cmp,
+    clippy::arithmetic_side_effects,
+    clippy::cast_possible_truncation,
+    clippy::cast_precision_loss,
+    reason = "a test may panic: that is how it fails; the numbers are exact by construction"
+)]
+
+use regler_pid::actuator::{ActuatorConfig, Drive, ThreePoint};
+
+/// Module docs: "an error smaller than `smallest_move()` (the dead band or one minimum pulse's
+/// travel, the larger) is not driven" — so an error of exactly `smallest_move()` is, in both
+/// forms, whichever of the two sets it. Every number here is a power of two: no rounding.
+#[test]
+fn an_error_of_exactly_the_smallest_move_is_driven() {
+    // (min_pulse, dead_band): the minimum pulse's travel 2^-7 sets the smallest move, then the
+    // dead band 2^-7 does (over a minimum pulse's travel of 2^-8). Half a sample either way.
+    for (min_pulse, dead_band) in [(0.5, 0.0), (0.5, 2f64.powi(-8)), (0.25, 2f64.powi(-7))] {
+        let config = ActuatorConfig {
+            run_time: 64.0,
+            min_pulse,
+            dead_band,
+            h: 1.0,
+        };
+        let smallest = ThreePoint::new(config, 0.5).unwrap().smallest_move();
+        assert_eq!(smallest, (min_pulse / 64.0f64).max(dead_band));
+        let seconds = smallest * 64.0;
+        for sign in [1.0, -1.0] {
+            let drive = |s: f64| {
+                if sign > 0.0 {
+                    Drive::Open(s)
+                } else {
+                    Drive::Close(s)
+                }
+            };
+            // Positional: exactly the smallest move is driven, and lands on the target.
+            let mut v = ThreePoint::new(config, 0.5).unwrap();
+            assert_eq!(v.update(0.5 + sign * smallest).unwrap(), drive(seconds));
+            assert_eq!(v.position(), 0.5 + sign * smallest);
+            assert_eq!(v.update(0.5 + sign * smallest).unwrap(), Drive::Stop);
+            // Just under it is not.
+            let mut v = ThreePoint::new(config, 0.5).unwrap();
+            let under = 0.5 + sign * (smallest - 2f64.powi(-20));
+            assert_eq!(v.update(under).unwrap(), Drive::Stop);
+            // Velocity: a request of exactly the smallest move is driven at once; half of it
+            // waits, and the second half completes it.
+            let mut v = ThreePoint::new(config, 0.5).unwrap();
+            assert_eq!(v.update_delta(sign * smallest).unwrap(), drive(seconds));
+            assert_eq!(v.position(), 0.5 + sign * smallest);
+            let mut v = ThreePoint::new(config, 0.5).unwrap();
+            assert_eq!(v.update_delta(sign * smallest / 2.0).unwrap(), Drive::Stop);
+            assert_eq!(
+                v.update_delta(sign * smallest / 2.0).unwrap(),
+                drive(seconds)
+            );
+            assert_eq!(v.position(), 0.5 + sign * smallest);
+        }
+    }
+}
+
+/// Module docs: "the estimate is a compensated sum, so one sample's travel is neither rounded
+/// away nor rounded the same way every sample". In `f32` at 0.5 (an ulp of 2^-24 above, 2^-25
+/// below), a travel of 2^-26 a sample is under half an ulp: a plain sum would never move. The
+/// estimate read after n samples is the exact travel rounded to `f32` (ties to even) — opening
+/// and closing, in both forms.
+#[test]
+fn the_estimate_reads_the_exact_travel_rounded_to_the_type() {
+    let config = ActuatorConfig {
+        run_time: 2f32.powi(26),
+        min_pulse: 0.0,
+        dead_band: 0.0,
+        h: 1.0,
+    };
+    let step = 2f64.powi(-26);
+    for sign in [1.0f64, -1.0] {
+        let mut positional = ThreePoint::new(config, 0.5f32).unwrap();
+        let mut velocity = ThreePoint::new(config, 0.5f32).unwrap();
+        // Positional: a target far away, one whole sample (2^-26 of the stroke) per update.
+        let far = if sign > 0.0 { 1.0 } else { 0.0 };
+        for n in 1..=300u32 {
+            let exact = 0.5 + sign * f64::from(n) * step;
+            let d = positional.update(far).unwrap();
+            assert_eq!(
+                d,
+                if sign > 0.0 {
+                    Drive::Open(1.0)
+                } else {
+                    Drive::Close(1.0)
+                }
+            );
+            assert_eq!(
+                positional.position(),
+                exact as f32,
+                "positional, {n} samples of {sign}·2^-26"
+            );
+            let d = velocity.update_delta((sign * step) as f32).unwrap();
+            assert_eq!(
+                d,
+                if sign > 0.0 {
+                    Drive::Open(1.0)
+                } else {
+                    Drive::Close(1.0)
+                }
+            );
+            assert_eq!(
+                velocity.position(),
+                exact as f32,
+                "velocity, {n} samples of {sign}·2^-26"
+            );
+        }
+    }
+}
+
+/// Module docs, velocity form: "requests smaller than `smallest_move()` wait and add up (kept as
+/// a change ...)", and a request is driven until it is covered. A request of n samples' travel
+/// is driven in exactly n whole-sample pulses and then nothing more, also when each sample's
+/// travel is under half an ulp of the estimate (the part driven is taken off the request from the
+/// compensated estimate, carry included).
+#[test]
+fn a_request_is_driven_to_the_last_sample_and_no_further() {
+    for (run_time, start) in [(2f32.powi(26), 0.5f32), (2f32.powi(10), 0.25), (64.0, 0.5)] {
+        let config = ActuatorConfig {
+            run_time,
+            min_pulse: 0.0,
+            dead_band: 0.0,
+            h: 1.0,
+        };
+        let step = 1.0 / f64::from(run_time);
+        for n in [1u32, 2, 3, 5, 17] {
+            for sign in [1.0f64, -1.0] {
+                let mut v = ThreePoint::new(config, start).unwrap();
+                let request = sign * f64::from(n) * step;
+                let mut pulses = 0;
+                let mut first = v.update_delta(request as f32).unwrap();
+                for _ in 0..n + 3 {
+                    match first {
+                        Drive::Open(s) | Drive::Close(s) => {
+                            assert_eq!(s, 1.0, "run time {run_time}, {n} samples: whole pulses");
+                            assert_eq!(matches!(first, Drive::Open(_)), sign > 0.0);
+                            pulses += 1;
+                        }
+                        Drive::Stop => {}
+                    }
+                    first = v.update_delta(0.0).unwrap();
+                }
+                assert_eq!(
+                    pulses, n,
+                    "run time {run_time}, start {start}: a request of {n} samples' travel ({sign})"
+                );
+                let exact = f64::from(start) + request;
+                assert_eq!(v.position(), exact as f32);
+            }
+        }
+    }
+}
+
+/// With no dead band and no minimum pulse, an error that one sample's pulse covers is driven by
+/// exactly one pulse, which puts the estimate on the target (positional form) or drives the
+/// whole request (velocity form): the next sample is `Stop`, not a pulse of a rounding error's
+/// length. Random run times, starts and errors within one sample's travel, in `f64` and `f32`
+/// (`wanted · run_time / run_time` is not `wanted` in floating point: the driver must not leave
+/// the difference to a second pulse).
+#[test]
+fn an_error_one_pulse_covers_takes_one_pulse() {
+    let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+    let mut next = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    macro_rules! check {
+        ($f:ty) => {
+            for case in 0..20_000 {
+                // At least 20 samples a stroke: the targets stay clear of the ends (snapped onto them).
+                let run_time = (20.0 + 980.0 * next()) as $f;
+                let h = (0.01 + 0.99 * next()) as $f;
+                let config = ActuatorConfig {
+                    run_time,
+                    min_pulse: 0.0,
+                    dead_band: 0.0,
+                    h,
+                };
+                let start = (0.1 + 0.8 * next()) as $f;
+                let travel = h / run_time;
+                let error = travel * (next() as $f) * if next() < 0.5 { -1.0 } else { 1.0 };
+                let target = start + error;
+                let mut v = ThreePoint::new(config, start).unwrap();
+                let first = v.update(target).unwrap();
+                let second = v.update(target).unwrap();
+                assert!(
+                    target == start || first != Drive::Stop,
+                    "case {case}: nothing driven"
+                );
+                assert_eq!(
+                    second,
+                    Drive::Stop,
+                    "case {case} ({}): positional, gt {run_time}, h {h}, {start} -> {target}: a \
+                     second pulse after {first:?}",
+                    stringify!($f)
+                );
+                assert_eq!(v.position(), target, "case {case}: positional, on the target");
+                let mut v = ThreePoint::new(config, start).unwrap();
+                let first = v.update_delta(error).unwrap();
+                let second = v.update_delta(0.0).unwrap();
+                assert_eq!(
+                    second,
+                    Drive::Stop,
+                    "case {case} ({}): velocity, gt {run_time}, h {h}, {start} + {error}: a \
+                     second pulse after {first:?}",
+                    stringify!($f)
+                );
+            }
+        };
+    }
+    check!(f64);
+    check!(f32);
+}
+
+/// `update`'s docs: the target is "clamped into 0..=1; within 64 ulps of an end it counts as
+/// that end" — and a target at an end is driven into the stop. So a target beyond an end, or
+/// closer to it than 64 ulps, ends with the estimate on the end and the driver stopped (no
+/// endless pulses into a stop); a target exactly 64 ulps from an end is an ordinary target and
+/// the estimate ends on it. In `f64` and `f32`, no dead band or minimum pulse (so that nothing
+/// but the end rule decides where the estimate stops).
+#[test]
+fn targets_at_beyond_and_near_the_ends() {
+    macro_rules! check {
+        ($f:ty) => {
+            let near = <$f>::EPSILON * 64.0;
+            let config = ActuatorConfig::<$f> {
+                run_time: 10.0,
+                min_pulse: 0.0,
+                dead_band: 0.0,
+                h: 1.0,
+            };
+            let cases: [($f, $f); 10] = [
+                (1.5, 1.0),
+                (<$f>::MAX, 1.0),
+                (1.0 - near / 2.0, 1.0),
+                (1.0 - near + <$f>::EPSILON / 2.0, 1.0),
+                (1.0 - near, 1.0 - near),
+                (-0.5, 0.0),
+                (<$f>::MIN, 0.0),
+                (near / 2.0, 0.0),
+                (near - near * <$f>::EPSILON, 0.0),
+                (near, near),
+            ];
+            for (target, end) in cases {
+                let mut v = ThreePoint::new(config, 0.5).unwrap();
+                let mut pulses = 0;
+                while v.update(target).unwrap() != Drive::Stop {
+                    pulses += 1;
+                    assert!(pulses <= 8, "{target}: still driving after {pulses} pulses");
+                }
+                assert_eq!(v.position(), end, "{} target {target}", stringify!($f));
+                for _ in 0..3 {
+                    assert_eq!(v.update(target).unwrap(), Drive::Stop, "{target}: stopped");
+                }
+            }
+        };
+    }
+    check!(f64);
+    check!(f32);
+}
