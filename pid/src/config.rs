@@ -627,4 +627,20 @@ mod tests {
         assert_eq!(terms.iter().filter(|t| t.1).count(), 4);
         assert_eq!(terms.iter().filter(|t| t.2).count(), 4);
     }
+
+    #[test]
+    fn kinds_print_as_the_source_named_them_and_parse_back() {
+        let names = ["P", "I", "D", "PI", "PD", "ID", "PID"];
+        for (kind, name) in Kind::ALL.iter().zip(names) {
+            assert_eq!(kind.to_string(), name);
+            assert_eq!(Kind::parse(&kind.to_string()), Some(*kind));
+        }
+    }
+
+    #[test]
+    fn the_action_sign_is_plus_for_direct_and_minus_for_reverse() {
+        assert_eq!(Action::Direct.sign(), 1.0);
+        assert_eq!(Action::Reverse.sign(), -1.0);
+        assert_eq!(Action::default(), Action::Direct);
+    }
 }
