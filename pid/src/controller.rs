@@ -1503,4 +1503,37 @@ mod tests {
             }
         });
     }
+
+    #[test]
+    fn faults_say_which_and_any_follows_them() {
+        let cases = [
+            (0, false, "no fault"),
+            (
+                Faults::NON_FINITE_INPUT,
+                true,
+                "non-finite input: output held",
+            ),
+            (Faults::OVERFLOW, true, "overflow: output held"),
+            (
+                Faults::NON_FINITE_INPUT | Faults::OVERFLOW,
+                true,
+                "non-finite input and overflow: output held",
+            ),
+        ];
+        for (bits, any, text) in cases {
+            let faults = Faults(bits);
+            assert_eq!(faults.any(), any, "{text}");
+            assert_eq!(faults.to_string(), text);
+        }
+        // As a user meets them: a NaN measurement is a fault, named, until cleared.
+        let mut pid = Pid::<f64>::new(&pi()).unwrap();
+        assert!(!pid.faults().any());
+        let _ = pid.update(1.0, f64::NAN);
+        assert!(pid.faults().any());
+        assert_eq!(pid.faults().to_string(), "non-finite input: output held");
+        assert_eq!(
+            ValueError::NotFinite.to_string(),
+            "the value must be a finite number"
+        );
+    }
 }
