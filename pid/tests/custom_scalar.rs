@@ -8,6 +8,9 @@
     clippy::float_cmp,
     clippy::arithmetic_side_effects,
     clippy::cast_precision_loss,
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    clippy::indexing_slicing,
     reason = "a test may panic: that is how it fails"
 )]
 
