@@ -558,3 +558,83 @@ mod noise_band {
         assert_eq!(raised, 100);
     }
 }
+
+/// Each code prints as the source's display shows it: name, then number.
+#[test]
+fn codes_print_as_name_and_number() {
+    let texts: Vec<String> = Code::ALL.iter().map(ToString::to_string).collect();
+    assert_eq!(
+        texts,
+        [
+            "TYP (10)",
+            "WIN (21)",
+            "S (31)",
+            "RFEL (41)",
+            "KP (51)",
+            "TD (61)",
+            "TI (71)",
+            "YMIN (81)",
+            "YMAX (82)",
+            "DYMAX (83)",
+            "Y (91)",
+            "XIN (95)"
+        ]
+    );
+}
+
+/// `EditError::code`: a configuration error names the keypad code that edits its parameter,
+/// and none for N, b, c and Tt, which are not on the keypad.
+#[test]
+fn a_configuration_error_names_the_code_that_edits_its_parameter() {
+    use regler_pid::{ConfigError, EditError, Parameter};
+    let rows = [
+        (Parameter::K, Some(Code::Kp)),
+        (Parameter::Ti, Some(Code::Ti)),
+        (Parameter::Td, Some(Code::Td)),
+        (Parameter::N, None),
+        (Parameter::B, None),
+        (Parameter::C, None),
+        (Parameter::Tt, None),
+        (Parameter::H, Some(Code::S)),
+        (Parameter::Ymin, Some(Code::Ymin)),
+        (Parameter::Ymax, Some(Code::Ymax)),
+        (Parameter::Dymax, Some(Code::Dymax)),
+    ];
+    for (parameter, code) in rows {
+        let error = EditError::<f64>::Config(ConfigError::NotFinite {
+            parameter,
+            value: f64::NAN,
+        });
+        assert_eq!(error.code(), code, "{parameter:?}");
+    }
+}
+
+/// YMIN and YMAX edits are checked against each other: YMIN up to YMAX and YMAX down to YMIN
+/// are taken (equal limits too), one past the other is refused naming the other, and the
+/// shadow set keeps what was taken.
+#[test]
+fn output_limit_edits_keep_ymin_at_most_ymax() {
+    let scaling = Scaling::new(0.0, 100.0).unwrap();
+    let mut s = regler_pid::Staged::new(with(Kind::PI, 10.0, 0.0), scaling, limits()).unwrap();
+    // The default limits are 0..10, the operator's range for both 0..10: YMAX to 6 first.
+    s.edit(Code::Ymax, 6.0).unwrap();
+    s.edit(Code::Ymin, 4.0).unwrap();
+    assert_eq!(s.shadow().config.ymin, 4.0);
+    s.edit(Code::Ymin, 6.0).unwrap();
+    assert_eq!(s.shadow().config.ymin, 6.0);
+    s.edit(Code::Ymin, 2.0).unwrap();
+    let e = s.edit(Code::Ymin, 7.0).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "ILLEGAL VALUE: YMIN must be <= YMAX (6), got 7"
+    );
+    assert_eq!(s.shadow().config.ymin, 2.0);
+    s.edit(Code::Ymax, 2.0).unwrap();
+    assert_eq!(s.shadow().config.ymax, 2.0);
+    let e = s.edit(Code::Ymax, 1.5).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "ILLEGAL VALUE: YMAX must be >= YMIN (2), got 1.5"
+    );
+    assert_eq!(s.shadow().config.ymax, 2.0);
+}
