@@ -638,3 +638,26 @@ fn output_limit_edits_keep_ymin_at_most_ymax() {
     );
     assert_eq!(s.shadow().config.ymax, 2.0);
 }
+
+/// `Staged::edited`: whether the shadow set differs from the active one — not after the start,
+/// yes after an edit, no longer once the commit is in force, no after a discard, and no after
+/// an edit back to the active value.
+#[test]
+fn edited_says_whether_the_shadow_set_differs_from_the_active_one() {
+    let scaling = Scaling::new(0.0, 100.0).unwrap();
+    let mut s = regler_pid::Staged::new(with(Kind::PI, 10.0, 0.0), scaling, limits()).unwrap();
+    assert!(!s.edited());
+    s.edit(Code::Ti, 20.0).unwrap();
+    assert!(s.edited());
+    s.commit();
+    assert!(s.edited(), "committed, not yet in force");
+    assert!(s.take_commit().is_some());
+    assert!(!s.edited());
+    s.edit(Code::Kp, 3.0).unwrap();
+    assert!(s.edited());
+    s.discard();
+    assert!(!s.edited());
+    s.edit(Code::Ti, 30.0).unwrap();
+    s.edit(Code::Ti, 20.0).unwrap();
+    assert!(!s.edited(), "edited back to the value in force");
+}
