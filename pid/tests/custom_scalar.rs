@@ -192,3 +192,75 @@ fn a_saturated_sample_of_the_users_type_is_held_with_the_overflow_fault() {
         assert!(!pid.faults().any(), "{kind}: still faulted at sane inputs");
     }
 }
+
+/// A float-like type of the user's own that keeps NaN and infinities, to check the trait's
+/// provided operations against their docs.
+#[derive(Clone, Copy, Debug, PartialEq, PartialOrd)]
+struct Plain(f64);
+
+impl Scalar for Plain {
+    const ZERO: Plain = Plain(0.0);
+    const MAX: Plain = Plain(f64::MAX);
+    fn from_real<F: Real>(v: F) -> Plain {
+        Plain(v.to_f64_exact())
+    }
+    fn to_real<F: Real>(self) -> F {
+        F::from_f64_nearest(self.0)
+    }
+    fn add(self, rhs: Plain) -> Plain {
+        Plain(self.0 + rhs.0)
+    }
+    fn sub(self, rhs: Plain) -> Plain {
+        Plain(self.0 - rhs.0)
+    }
+    fn mul(self, rhs: Plain) -> Plain {
+        Plain(self.0 * rhs.0)
+    }
+    fn is_finite(self) -> bool {
+        self.0.is_finite()
+    }
+}
+
+/// The operations `Scalar` provides, as their docs state them, for a type that takes the
+/// defaults: `abs` is |x| (NaN stays NaN), `both_finite` is both `is_finite`, and
+/// `magnitude_within(bound)` is |x| ≤ bound, false for NaN and infinities — every pair of
+/// values from ±0 to ±MAX, ±∞ and NaN, and bounds from 0 to MAX.
+#[test]
+fn the_provided_operations_do_what_their_docs_say() {
+    let values = [
+        f64::NEG_INFINITY,
+        -f64::MAX,
+        -3.0,
+        -2.0,
+        -f64::MIN_POSITIVE,
+        -0.0,
+        0.0,
+        f64::MIN_POSITIVE,
+        2.0,
+        3.0,
+        f64::MAX,
+        f64::INFINITY,
+        f64::NAN,
+    ];
+    for x in values {
+        let abs = Plain(x).abs().0;
+        assert!(
+            abs == x.abs() || (x.is_nan() && abs.is_nan()),
+            "|{x}| = {abs}"
+        );
+        for y in values {
+            assert_eq!(
+                Plain::both_finite(Plain(x), Plain(y)),
+                x.is_finite() && y.is_finite(),
+                "both_finite({x}, {y})"
+            );
+        }
+        for bound in [0.0, 2.0, 3.0, f64::MAX] {
+            assert_eq!(
+                Plain(x).magnitude_within(Plain(bound)),
+                x.is_finite() && x.abs() <= bound,
+                "magnitude_within({x}, {bound})"
+            );
+        }
+    }
+}

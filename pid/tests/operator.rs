@@ -676,3 +676,37 @@ fn edited_says_whether_the_shadow_set_differs_from_the_active_one() {
     s.edit(Code::Ti, 20.0).unwrap();
     assert!(!s.edited(), "edited back to the value in force");
 }
+
+/// What a `Station` reports: Y and XIN are the last sample's output and measurement; the night
+/// input reads back as set; `commits` counts the commits applied, at the sample that applies
+/// them.
+#[test]
+fn a_station_reports_its_last_sample_night_input_and_commits() {
+    let scaling = Scaling::new(0.0, 100.0).unwrap();
+    let mut st = Station::<f64, f64>::new(
+        with(Kind::PI, 10.0, 0.0),
+        scaling,
+        OperatorLimits::default(),
+    )
+    .unwrap();
+    assert!(!st.night());
+    assert_eq!(st.commits(), 0);
+    let y = st.sample(42.0);
+    assert_eq!(st.value(Code::Y), Some(y));
+    assert_eq!(st.value(Code::Xin), Some(42.0));
+    let y = st.sample(45.5);
+    assert_eq!(st.value(Code::Y), Some(y));
+    assert_eq!(st.value(Code::Xin), Some(45.5));
+    st.set_night(true);
+    assert!(st.night());
+    st.set_night(false);
+    assert!(!st.night());
+    for n in 1..=3 {
+        st.staged_mut().edit(Code::Kp, f64::from(n)).unwrap();
+        st.staged_mut().commit();
+        assert_eq!(st.commits(), n - 1, "not before the sample");
+        st.sample(50.0);
+        assert_eq!(st.commits(), n);
+        assert_eq!(st.value(Code::Kp), Some(f64::from(n)));
+    }
+}
