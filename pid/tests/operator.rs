@@ -169,7 +169,7 @@ fn fixed_point_station_refuses_a_scale_it_would_clip() {
     // "Strictly inside its range": an end exactly at -MAX is as clipped as one at MAX (a
     // narrow scale, so that only the end decides); one step inside, the scale is held (the
     // station may still refuse the loop's reach there, a check of its own).
-    let lsb = 2f64.powi(-16);
+    let lsb = 1.0 / 65_536.0;
     let minus_max = -(32_768.0 - lsb);
     for (min, clipped) in [(minus_max, true), (minus_max + lsb, false)] {
         let scaling = Scaling::new(min, min + 1.0).unwrap();
