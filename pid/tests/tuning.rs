@@ -1179,3 +1179,56 @@ fn a_pure_lag_is_refused_raw_and_settles_with_the_sampling_delay() {
         }
     }
 }
+
+/// `Tuning::apply`: "an integral time shorter than the sample period is refused" — one equal to
+/// it is applied; one just below is refused naming Ti, and the configuration is unchanged.
+#[test]
+fn a_rule_result_with_ti_at_the_sample_period_is_applied_and_below_it_refused() {
+    use regler_pid::tuning::Tuning;
+    use regler_pid::{ConfigError, Parameter};
+    let base = Config {
+        h: 0.5,
+        ..Config::default()
+    };
+    let at = Tuning {
+        kind: Kind::PI,
+        k: 2.0,
+        ti: 0.5,
+        td: 0.0,
+        b: 1.0,
+    };
+    let mut config = base;
+    at.apply(&mut config).unwrap();
+    assert_eq!((config.kind, config.k, config.ti), (Kind::PI, 2.0, 0.5));
+    let below = Tuning {
+        ti: 0.5 - f64::EPSILON,
+        ..at
+    };
+    let mut config = base;
+    let e = below.apply(&mut config).unwrap_err();
+    assert!(
+        matches!(e, ConfigError::OutOfRange { parameter: Parameter::Ti, value, .. } if value == 0.5 - f64::EPSILON),
+        "{e:?}"
+    );
+    assert_eq!(config, base, "unchanged");
+}
+
+/// Each rule error says what was wrong, as a user reads it.
+#[test]
+fn rule_errors_say_what_was_wrong() {
+    use regler_pid::tuning::RuleError;
+    let zn = |ku: f64, tu: f64, kind| ziegler_nichols(Ultimate { ku, tu }, kind).unwrap_err();
+    assert_eq!(zn(-1.0, 2.0, Kind::PI), RuleError::Input("Ku"));
+    assert_eq!(
+        zn(2.0, 4.0, Kind::PD).to_string(),
+        "the rule has no setting for a PD controller"
+    );
+    assert_eq!(
+        zn(f64::NAN, 4.0, Kind::PI).to_string(),
+        "Ku must be finite and positive"
+    );
+    assert_eq!(
+        RuleError::Result("integral time Ti").to_string(),
+        "the rule's integral time Ti is not a finite positive number for these inputs (they overflow or vanish in this float type)"
+    );
+}
