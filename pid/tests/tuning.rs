@@ -1232,3 +1232,19 @@ fn rule_errors_say_what_was_wrong() {
         "the rule's integral time Ti is not a finite positive number for these inputs (they overflow or vanish in this float type)"
     );
 }
+
+/// A rule's Td that overflows while K and Ti do not (AMIGO PID: Td = 0.5·L·T / (0.3·L + T),
+/// and L·T overflows first) is refused naming Td, not handed on as an infinite derivative time.
+#[test]
+fn a_rule_whose_td_overflows_is_refused_naming_it() {
+    use regler_pid::tuning::{Fopdt, RuleError, amigo};
+    let model = Fopdt {
+        gain: 1.0,
+        time_constant: 1e200,
+        dead_time: 1e200,
+    };
+    assert_eq!(
+        amigo(model, Kind::PID),
+        Err(RuleError::Result("derivative time Td"))
+    );
+}
