@@ -1248,3 +1248,76 @@ fn a_rule_whose_td_overflows_is_refused_naming_it() {
         Err(RuleError::Result("derivative time Td"))
     );
 }
+
+/// Each rule gives the formulas its docs state, over a grid of inputs (process gains of either
+/// sign and not 1, lag- and delay-dominated models), to rounding: Ziegler–Nichols P, PI, PID;
+/// AMIGO PI and PID with b from τ = L/(L + T); SIMC PI.
+#[test]
+fn each_rule_gives_the_formulas_its_docs_state() {
+    use regler_pid::tuning::{Fopdt, amigo, simc};
+    let close = |got: f64, want: f64, what: &str| {
+        assert!(
+            (got - want).abs() <= 1e-12 * want.abs(),
+            "{what}: {got} for {want}"
+        );
+    };
+    for ku in [0.3, 2.0, 8.0, 150.0] {
+        for tu in [0.5, 3.63, 40.0] {
+            let u = Ultimate { ku, tu };
+            let p = ziegler_nichols(u, Kind::P).unwrap();
+            close(p.k, 0.5 * ku, "ZN P K");
+            let pi = ziegler_nichols(u, Kind::PI).unwrap();
+            close(pi.k, 0.45 * ku, "ZN PI K");
+            close(pi.ti, tu / 1.2, "ZN PI Ti");
+            let pid = ziegler_nichols(u, Kind::PID).unwrap();
+            close(pid.k, 0.6 * ku, "ZN PID K");
+            close(pid.ti, tu / 2.0, "ZN PID Ti");
+            close(pid.td, tu / 8.0, "ZN PID Td");
+            assert_eq!((p.b, pi.b, pid.b), (1.0, 1.0, 1.0));
+        }
+    }
+    for kp in [-3.0f64, 0.25, 2.0] {
+        for (t, l) in [
+            (10.0, 1.0),
+            (5.0, 5.0),
+            (1.0, 4.0),
+            (100.0, 0.3),
+            (2.0, 2.1),
+        ] {
+            let model = Fopdt {
+                gain: kp,
+                time_constant: t,
+                dead_time: l,
+            };
+            let g: f64 = kp.abs();
+            let tau = l / (l + t);
+            let b = if tau < 0.5 { 0.0 } else { 1.0 };
+            let pi = amigo(model, Kind::PI).unwrap();
+            close(
+                pi.k,
+                (0.15 + (0.35 - l * t / ((l + t) * (l + t))) * t / l) / g,
+                "AMIGO PI K",
+            );
+            close(
+                pi.ti,
+                0.35 * l + 13.0 * l * t * t / (t * t + 12.0 * l * t + 7.0 * l * l),
+                "AMIGO PI Ti",
+            );
+            assert_eq!((pi.td, pi.b), (0.0, b), "AMIGO PI b at tau {tau}");
+            let pid = amigo(model, Kind::PID).unwrap();
+            close(pid.k, (0.2 + 0.45 * t / l) / g, "AMIGO PID K");
+            close(
+                pid.ti,
+                (0.4 * l + 0.8 * t) / (l + 0.1 * t) * l,
+                "AMIGO PID Ti",
+            );
+            close(pid.td, 0.5 * l * t / (0.3 * l + t), "AMIGO PID Td");
+            assert_eq!(pid.b, b, "AMIGO PID b at tau {tau}");
+            for tc in [0.5 * l, l, 3.0 * l] {
+                let s = simc(model, tc).unwrap();
+                close(s.k, t / (g * (tc + l)), "SIMC K");
+                close(s.ti, t.min(4.0 * (tc + l)), "SIMC Ti");
+            }
+        }
+    }
+}
