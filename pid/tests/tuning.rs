@@ -1321,3 +1321,82 @@ fn each_rule_gives_the_formulas_its_docs_state() {
         }
     }
 }
+
+/// The settling test of `identify_step_at` (module docs: the last tenth and the tenth before
+/// "agree to 0.2 % of the change, plus four standard deviations of the difference of two means
+/// of noise of this peak"): with a noise peak of 1 % of the change measured before the step,
+/// that allowance is 0.2 % + 4 · 1 % / √20 ≈ 1.1 % for a tail of 20 samples. A response still
+/// climbing by 2.3 % of the change from one tenth to the next is refused as not settled (its
+/// message in percent); the same response without the climb is taken; and 20 samples from the
+/// step are enough to be looked at.
+#[test]
+fn a_response_still_moving_past_the_noise_allowance_is_not_settled() {
+    use regler_pid::tuning::{IdentifyError, identify_step_at};
+    let log = |climb: f64, n: usize| -> Vec<f64> {
+        let mut y: Vec<f64> = (0..30)
+            .map(|k| if k % 2 == 0 { 0.01 } else { -0.01 })
+            .collect();
+        y.extend((0..n).map(|k| {
+            let t = k as f64;
+            1.0 - (-t / 10.0).exp() + climb * t
+        }));
+        y
+    };
+    let moving = log(0.0015, 200);
+    match identify_step_at(&moving, 30, 1.0, 1.0) {
+        Err(IdentifyError::NotSettled(m)) => {
+            assert!(m > 0.02 && m < 0.025, "moving {m}");
+            let text = IdentifyError::NotSettled(m).to_string();
+            assert!(
+                text.contains(&format!("by {:.2} % of the change", m * 100.0)),
+                "{text}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(identify_step_at(&log(0.0, 200), 30, 1.0, 1.0).is_ok());
+    let short = identify_step_at(&log(0.0, 20), 30, 1.0, 1.0);
+    assert!(
+        !matches!(short, Err(IdentifyError::TooFewSamples(_))),
+        "20 samples: {short:?}"
+    );
+    assert_eq!(
+        identify_step_at(&log(0.0, 19), 30, 1.0, 1.0),
+        Err(IdentifyError::TooFewSamples(19))
+    );
+}
+
+/// A long log in `f32` — 10⁶ samples (17 minutes at 1 kHz) of a small step on a large level,
+/// the case where sums of samples lose digits — identifies the same model as the log in `f64`,
+/// to 10⁻⁴ of each parameter.
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "two logs of 10⁶ samples: hours under Miri; safe code, run natively in every CI run"
+)]
+fn a_long_f32_log_identifies_the_model_the_f64_log_does() {
+    use regler_pid::tuning::identify_step_at;
+    let (n, pre, h) = (1_000_000usize, 50_000usize, 0.001);
+    let (level, change, t, l) = (50.0, 0.5, 60.0, 8.0);
+    let y64: Vec<f64> = (0..n)
+        .map(|k| {
+            let after = (k as f64 - pre as f64) * h - l;
+            level
+                + if after > 0.0 {
+                    change * (1.0 - (-after / t).exp())
+                } else {
+                    0.0
+                }
+        })
+        .collect();
+    let y32: Vec<f32> = y64.iter().map(|&v| v as f32).collect();
+    let m64 = identify_step_at(&y64, pre, h, 1.0).unwrap();
+    let m32 = identify_step_at(&y32, pre, h as f32, 1.0).unwrap();
+    for (name, a, b) in [
+        ("K", f64::from(m32.gain), m64.gain),
+        ("T", f64::from(m32.time_constant), m64.time_constant),
+        ("L", f64::from(m32.dead_time), m64.dead_time),
+    ] {
+        assert!((a - b).abs() <= 1e-4 * b.abs(), "{name}: f32 {a}, f64 {b}");
+    }
+}
