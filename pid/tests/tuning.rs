@@ -1400,3 +1400,37 @@ fn a_long_f32_log_identifies_the_model_the_f64_log_does() {
         assert!((a - b).abs() <= 1e-4 * b.abs(), "{name}: f32 {a}, f64 {b}");
     }
 }
+
+/// An inverse response is refused with how far it first went the wrong way, as a positive
+/// fraction of the change and in the message in percent: a dip of 5 % of the change during
+/// the dead time, then a first-order rise.
+#[test]
+fn an_inverse_response_reports_its_dip() {
+    use regler_pid::tuning::{IdentifyError, identify_step_at};
+    let mut y = vec![0.0f64; 30];
+    y.extend((0..400).map(|k| {
+        let t = f64::from(k);
+        let rise = if k < 40 {
+            0.0
+        } else {
+            1.0 - (-(t - 40.0) / 20.0).exp()
+        };
+        let dip = if k < 40 {
+            -0.05 * (std::f64::consts::PI * t / 40.0).sin()
+        } else {
+            0.0
+        };
+        rise + dip
+    }));
+    match identify_step_at(&y, 30, 1.0, 1.0) {
+        Err(IdentifyError::Undershoot(by)) => {
+            assert!(by > 0.04 && by < 0.06, "{by}");
+            let text = IdentifyError::Undershoot(by).to_string();
+            assert!(
+                text.contains(&format!("wrong way by {:.1} %", by * 100.0)),
+                "{text}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+}
