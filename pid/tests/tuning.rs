@@ -1475,3 +1475,126 @@ fn a_noiseless_finely_sampled_fopdt_is_recovered_to_a_fraction_of_a_sample() {
         );
     }
 }
+
+/// The relay experiment driven by a measurement of the test's own (no plant), so every period
+/// and amplitude is exact: the relay switches only when the error is *beyond* the hysteresis;
+/// a period of 4 samples is a limit cycle and one of 3 is chattering; periods that agree give
+/// Tu = the period and Ku = 4d / (π·√(a² − ε²)); periods that do not agree never finish; and
+/// each error says what happened.
+#[test]
+fn the_relay_on_a_synthetic_measurement() {
+    use regler_pid::Action;
+    let cfg = RelayConfig {
+        action: Action::Direct,
+        bias: 0.0,
+        amplitude: 1.0,
+        hysteresis: 0.5,
+        h: 0.25,
+        cycles: 3,
+        tolerance: 0.05,
+        timeout: 1000.0,
+    };
+    // The error is −measurement (set-point 0): the relay, high, goes low once the measurement
+    // is above +ε, and high again once it is below −ε.
+    let mut r = Relay::new(cfg).unwrap();
+    assert_eq!(r.update(0.0, 0.0), Ok(RelayStep::Running(1.0)));
+    assert_eq!(
+        r.update(0.0, 0.5),
+        Ok(RelayStep::Running(1.0)),
+        "at +ε: no switch"
+    );
+    assert_eq!(r.update(0.0, 0.5 + 1e-9), Ok(RelayStep::Running(-1.0)));
+    assert_eq!(
+        r.update(0.0, -0.5),
+        Ok(RelayStep::Running(-1.0)),
+        "at −ε: no switch"
+    );
+    assert_eq!(r.update(0.0, -0.5 - 1e-9), Ok(RelayStep::Running(1.0)));
+
+    // A wave of `period` samples between −2 and +2: one rise a period.
+    let run = |periods: &[usize]| {
+        let mut r = Relay::new(cfg).unwrap();
+        let mut last = Ok(RelayStep::Running(0.0));
+        for &p in periods.iter().cycle().take(40) {
+            for k in 0..p {
+                let y = if k < p / 2 { -2.0 } else { 2.0 };
+                last = r.update(0.0, y);
+                if !matches!(last, Ok(RelayStep::Running(_))) {
+                    return last;
+                }
+            }
+        }
+        last
+    };
+    let a: f64 = 2.0;
+    let ku = 4.0 / (std::f64::consts::PI * (a * a - 0.25).sqrt());
+    for period in [4usize, 10, 24] {
+        match run(&[period]) {
+            Ok(RelayStep::Done(u)) => {
+                assert!((u.tu - period as f64 * 0.25).abs() < 1e-12, "Tu {}", u.tu);
+                assert!((u.ku - ku).abs() < 1e-12 * ku, "Ku {} for {ku}", u.ku);
+            }
+            other => panic!("period {period}: {other:?}"),
+        }
+    }
+    let chatter = run(&[3]);
+    assert_eq!(chatter, Err(RelayError::Chattering { period: 0.75 }));
+    assert_eq!(
+        chatter.unwrap_err().to_string(),
+        "the relay chatters (period 0.75 s): raise the hysteresis above the measurement noise"
+    );
+    // Periods of 10 and 14 samples by turns: a spread of 1/3, never within 5 %.
+    match run(&[10, 14]) {
+        Err(RelayError::Timeout { periods }) => {
+            assert!(periods > 10, "{periods}");
+            assert_eq!(
+                RelayError::<f64>::Timeout { periods }.to_string(),
+                format!("no stable limit cycle before the time-out ({periods} periods seen)")
+            );
+        }
+        Ok(RelayStep::Running(_)) => {}
+        other => panic!("{other:?}"),
+    }
+    // Periods of 40 and 41 samples by turns: a spread of 2.5 %, within 5 %: done, Tu between.
+    match run(&[40, 41]) {
+        Ok(RelayStep::Done(u)) => assert!(u.tu > 10.0 && u.tu < 10.25, "Tu {}", u.tu),
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(
+        RelayError::<f64>::Config("h must be finite and positive").to_string(),
+        "relay configuration: h must be finite and positive"
+    );
+    // "How closely they must agree: largest relative spread": a spread exactly at the
+    // tolerance agrees. Two periods at a time; periods of 3 and 4 s by turns (a spread of
+    // 1/3.5), then periods of 3 s whose amplitude is 3 and 4 by turns (the same spread: the
+    // low half at −2, the high one at 4 and 6; a period runs from rise to rise).
+    let at = RelayConfig {
+        cycles: 2,
+        tolerance: 1.0 / 3.5,
+        ..cfg
+    };
+    let waves: [&[(usize, f64, f64)]; 2] = [
+        &[(12, -2.0, 2.0), (16, -2.0, 2.0)],
+        &[(12, -2.0, 4.0), (12, -2.0, 6.0)],
+    ];
+    for wave in waves {
+        let mut r = Relay::new(at).unwrap();
+        let mut done = None;
+        'run: for &(p, low, high) in wave.iter().cycle().take(20) {
+            for k in 0..p {
+                let y = if k < p / 2 { low } else { high };
+                match r.update(0.0, y) {
+                    Ok(RelayStep::Running(_)) => {}
+                    other => {
+                        done = Some(other);
+                        break 'run;
+                    }
+                }
+            }
+        }
+        assert!(
+            matches!(done, Some(Ok(RelayStep::Done(_)))),
+            "{wave:?}: {done:?}"
+        );
+    }
+}
