@@ -1592,9 +1592,17 @@ fn the_relay_on_a_synthetic_measurement() {
                 }
             }
         }
-        assert!(
-            matches!(done, Some(Ok(RelayStep::Done(_)))),
-            "{wave:?}: {done:?}"
-        );
+        match done {
+            Some(Ok(RelayStep::Done(u))) => {
+                assert_eq!(r.result(), Some(u), "the estimate, once done");
+                assert_eq!(
+                    r.update(0.0, 0.0),
+                    Ok(RelayStep::Done(u)),
+                    "and it stays done"
+                );
+            }
+            other => panic!("{wave:?}: {other:?}"),
+        }
     }
+    assert_eq!(Relay::new(cfg).unwrap().result(), None);
 }
