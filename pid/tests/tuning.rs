@@ -1605,4 +1605,22 @@ fn the_relay_on_a_synthetic_measurement() {
         }
     }
     assert_eq!(Relay::new(cfg).unwrap().result(), None);
+    // A relay of 10⁻³⁰⁰ against an oscillation of 10³⁰⁰: Ku = 4d/(π·a) underflows to 0, which
+    // is no estimate.
+    let mut r = Relay::new(RelayConfig {
+        amplitude: 1e-300,
+        ..cfg
+    })
+    .unwrap();
+    let mut last = Ok(RelayStep::Running(0.0));
+    for k in 0..400 {
+        last = r.update(0.0, if k % 10 < 5 { -1e300 } else { 1e300 });
+        if !matches!(last, Ok(RelayStep::Running(_))) {
+            break;
+        }
+    }
+    assert_eq!(
+        last,
+        Err(RelayError::AmplitudeUnmeasurable { amplitude: 1e300 })
+    );
 }
