@@ -1624,3 +1624,50 @@ fn the_relay_on_a_synthetic_measurement() {
         Err(RelayError::AmplitudeUnmeasurable { amplitude: 1e300 })
     );
 }
+
+/// From the attack on the identification (issue 22): a log whose sums overflow is refused as an
+/// overflow, never handed back as a model — the tenth before the last of an `f32` log from
+/// 3·10³⁸ (its mean overflowed to NaN, and a NaN "movement" passed the settling check), and a
+/// sample period so long that the log's duration overflows (the slack for a negative dead time
+/// became NaN and switched that check off: a two-lag response came back with L = 0).
+#[test]
+fn a_log_whose_sums_overflow_is_refused_not_modelled() {
+    use regler_pid::tuning::{IdentifyError, identify_step};
+    let y: Vec<f32> = (0..200)
+        .map(|i| {
+            let r = if i < 20 {
+                0.0
+            } else if i < 180 {
+                0.942 * (1.0 - (-(f64::from(i) - 20.0) / 15.0).exp())
+            } else {
+                1.0
+            };
+            (3e38 * (1.0 - r)) as f32
+        })
+        .collect();
+    assert!(
+        matches!(
+            identify_step(&y, 1.0f32, 1.0f32),
+            Err(IdentifyError::Overflow(_))
+        ),
+        "{:?}",
+        identify_step(&y, 1.0f32, 1.0f32)
+    );
+    let scaled: Vec<f32> = y.iter().map(|v| v / 1e30).collect();
+    assert!(matches!(
+        identify_step(&scaled, 1.0f32, 1.0f32),
+        Err(IdentifyError::NotSettled(_))
+    ));
+    let two_lags: Vec<f64> = (0..1000)
+        .map(|i| {
+            let t = f64::from(i);
+            1.0 - 0.5 * (-t).exp() - 0.5 * (-t / 100.0).exp()
+        })
+        .collect();
+    assert_eq!(
+        identify_step(&two_lags, 1.0, 1.0),
+        Err(IdentifyError::NotFopdt)
+    );
+    let huge = identify_step(&two_lags, 1e306, 1.0);
+    assert!(huge.is_err(), "{huge:?}");
+}
