@@ -84,31 +84,22 @@ fn the_estimate_reads_the_exact_travel_rounded_to_the_type() {
         let mut velocity = ThreePoint::new(config, 0.5f32).unwrap();
         // Positional: a target far away, one whole sample (2^-26 of the stroke) per update.
         let far = if sign > 0.0 { 1.0 } else { 0.0 };
+        let whole_sample = if sign > 0.0 {
+            Drive::Open(1.0)
+        } else {
+            Drive::Close(1.0)
+        };
         for n in 1..=300u32 {
             let exact = 0.5 + sign * f64::from(n) * step;
             let d = positional.update(far).unwrap();
-            assert_eq!(
-                d,
-                if sign > 0.0 {
-                    Drive::Open(1.0)
-                } else {
-                    Drive::Close(1.0)
-                }
-            );
+            assert_eq!(d, whole_sample);
             assert_eq!(
                 positional.position(),
                 exact as f32,
                 "positional, {n} samples of {sign}·2^-26"
             );
             let d = velocity.update_delta((sign * step) as f32).unwrap();
-            assert_eq!(
-                d,
-                if sign > 0.0 {
-                    Drive::Open(1.0)
-                } else {
-                    Drive::Close(1.0)
-                }
-            );
+            assert_eq!(d, whole_sample);
             assert_eq!(
                 velocity.position(),
                 exact as f32,
