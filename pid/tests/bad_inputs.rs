@@ -900,7 +900,7 @@ fn identify_step_at_the_extremes() {
     let lag: Vec<f64> = (0..60)
         .map(|k| if k < 3 { 0.0 } else { 1.0 - (-(f64::from(k) - 3.0) / 5.0).exp() })
         .collect();
-    let to_max: Vec<f64> = (0..45).map(|k| if k < 5 { 0.0 } else { f64::MAX }).collect();
+    let to_max: Vec<f64> = (0..45).map(|k| if k < 5 { -f64::MAX } else { f64::MAX }).collect();
     let mut with_inf = flat.clone();
     with_inf[39] = f64::NEG_INFINITY;
     use regler_pid::tuning::IdentifyError as E;
@@ -917,7 +917,7 @@ fn identify_step_at_the_extremes() {
         ("h MAX: T + L overflows", &lag, 0, f64::MAX, 1.0, E::Overflow("T + L (the sample period times the log)")),
         ("step 0", &flat, 0, 1.0, 0.0, E::Input("the step")),
         ("step subnormal: change / step overflows", &lag, 0, 1.0, f64::from_bits(1), E::Overflow("the gain (change / step)")),
-        ("samples 0 then MAX: the change overflows", &to_max, 0, 1.0, 1.0, E::Overflow("the change (the samples' mean)")),
+        ("samples -MAX then MAX: the change overflows", &to_max, 0, 1.0, 1.0, E::Overflow("the change (the samples' mean)")),
         ("step -0", &flat, 0, 1.0, -0.0, E::Input("the step")),
         ("step +inf", &flat, 0, 1.0, f64::INFINITY, E::Input("the step")),
         ("a NaN sample", &with_nan, 0, 1.0, 1.0, E::NotFinite(7)),
@@ -937,6 +937,10 @@ fn identify_step_at_the_extremes() {
     let unit = identify_step(&lag, 1.0, 1.0).unwrap();
     assert_eq!(tiny.gain, unit.gain);
     assert!((tiny.time_constant / f64::MIN_POSITIVE / unit.time_constant - 1.0).abs() < 1e-12, "{tiny:?}");
+    // A change of MAX fits (0 then MAX): a step to MAX, never an overflow.
+    let zero_to_max: Vec<f64> = to_max.iter().map(|&v| v.max(0.0)).collect();
+    let jump = identify_step(&zero_to_max, 1.0, 1.0).unwrap();
+    assert_eq!(jump.gain, f64::MAX);
     let huge_step = identify_step(&lag, 1.0, f64::MAX).unwrap();
     assert_eq!(huge_step.time_constant, unit.time_constant);
     assert!(huge_step.gain > 0.0 && huge_step.gain.is_finite());

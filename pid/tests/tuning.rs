@@ -1026,7 +1026,8 @@ fn the_relay_never_returns_a_non_finite_ku() {
 }
 
 /// Attack finding 8, identification: a step of 10⁻³¹⁰ gave Ok(gain ∞); a change that
-/// overflows (−10³⁰⁸ → 0.7·10³⁰⁸) was reported as NoResponse. Both are named overflows now.
+/// overflows was reported as NoResponse. Both are named overflows now: in `f32`, −3·10³⁸ →
+/// 3·10³⁸ (a change beyond `f32::MAX`). A change of 1.7·10³⁰⁸ in `f64` fits, and is modelled.
 #[test]
 fn identification_names_an_overflow() {
     use regler_pid::tuning::{IdentifyError, identify_step_at};
@@ -1036,6 +1037,10 @@ fn identification_names_an_overflow() {
         identify_step_at(&y, 10, h, 1e-310),
         Err(IdentifyError::Overflow("the gain (change / step)"))
     );
+    let y = log_of::<f32>(fopdt_response(5.0, 1.0), 10, 600, h, -3e38, 6e38, 0.0, 1);
+    let got = identify_step_at(&y, 10, h as f32, 1.0);
+    assert!(matches!(got, Err(IdentifyError::Overflow(_))), "{got:?}");
+    assert!(got.unwrap_err().to_string().contains("overflows"));
     let y = log_of::<f64>(
         fopdt_response(5.0, 1.0),
         10,
@@ -1046,9 +1051,11 @@ fn identification_names_an_overflow() {
         0.0,
         1,
     );
-    let got = identify_step_at(&y, 10, h, 1.0);
-    assert!(matches!(got, Err(IdentifyError::Overflow(_))), "{got:?}");
-    assert!(got.unwrap_err().to_string().contains("overflows"));
+    let m = identify_step_at(&y, 10, h, 1.0).unwrap();
+    assert!(
+        within_tolerance(&m, 1.7e308, 5.0, 1.0, h, 0.0, 600),
+        "{m:?}"
+    );
 }
 
 /// Attack finding 8, the rules: AMIGO gave Ok with Ti NaN (T = 10³⁰ in f32) or K NaN
@@ -1625,13 +1632,15 @@ fn the_relay_on_a_synthetic_measurement() {
     );
 }
 
-/// From the attack on the identification (issue 22): a log whose sums overflow is refused as an
-/// overflow, never handed back as a model — the tenth before the last of an `f32` log from
-/// 3·10³⁸ (its mean overflowed to NaN, and a NaN "movement" passed the settling check), and a
-/// sample period so long that the log's duration overflows (the slack for a negative dead time
-/// became NaN and switched that check off: a two-lag response came back with L = 0).
+/// From the attack on the identification (issue 22): a log near the type's largest value, or
+/// with a sample period so long that the log's duration overflows, is never handed back as a
+/// wrong model — the tenth before the last of an `f32` log from 3·10³⁸ (its plain sum
+/// overflowed, the mean was NaN, and a NaN "movement" passed the settling check: Ok; the sums
+/// are of deviations now, and the log is refused as not settled, as the same log at 2⁻¹⁰⁰ is,
+/// with the same figure), and a two-lag response at h = 10³⁰⁶ (the slack for a negative dead
+/// time became NaN and switched that check off: L = 0).
 #[test]
-fn a_log_whose_sums_overflow_is_refused_not_modelled() {
+fn a_log_near_the_largest_value_or_of_a_huge_period_is_never_modelled_wrongly() {
     use regler_pid::tuning::{IdentifyError, identify_step};
     let y: Vec<f32> = (0..200)
         .map(|i| {
@@ -1645,19 +1654,10 @@ fn a_log_whose_sums_overflow_is_refused_not_modelled() {
             (3e38 * (1.0 - r)) as f32
         })
         .collect();
-    assert!(
-        matches!(
-            identify_step(&y, 1.0f32, 1.0f32),
-            Err(IdentifyError::Overflow(_))
-        ),
-        "{:?}",
-        identify_step(&y, 1.0f32, 1.0f32)
-    );
-    let scaled: Vec<f32> = y.iter().map(|v| v / 1e30).collect();
-    assert!(matches!(
-        identify_step(&scaled, 1.0f32, 1.0f32),
-        Err(IdentifyError::NotSettled(_))
-    ));
+    let got = identify_step(&y, 1.0f32, 1.0f32);
+    assert!(matches!(got, Err(IdentifyError::NotSettled(_))), "{got:?}");
+    let scaled: Vec<f32> = y.iter().map(|v| v * 2f32.powi(-100)).collect();
+    assert_eq!(identify_step(&scaled, 1.0f32, 1.0f32), got);
     let two_lags: Vec<f64> = (0..1000)
         .map(|i| {
             let t = f64::from(i);
@@ -1670,4 +1670,252 @@ fn a_log_whose_sums_overflow_is_refused_not_modelled() {
     );
     let huge = identify_step(&two_lags, 1e306, 1.0);
     assert!(huge.is_err(), "{huge:?}");
+}
+
+/// What `identify_step_at` returns, in `F`.
+type Fit<F> = Result<regler_pid::tuning::Fopdt<F>, regler_pid::tuning::IdentifyError<F>>;
+
+/// The model of `y` and of `y` multiplied by `scale` (a power of two), in `F`.
+fn models_at_scale<F: regler_pid::Real + core::ops::Mul<Output = F>>(
+    y: &[F],
+    pre: usize,
+    h: F,
+    scale: F,
+) -> (Fit<F>, Fit<F>) {
+    let scaled: Vec<F> = y.iter().map(|&v| v * scale).collect();
+    (
+        regler_pid::tuning::identify_step_at(y, pre, h, F::one()),
+        regler_pid::tuning::identify_step_at(&scaled, pre, h, F::one()),
+    )
+}
+
+/// Attack finding (break 3): the baseline's and the tails' means were plain sums of the
+/// samples, so a long log at a high level was refused as an overflow although every mean, and
+/// the model, fit the type (an `f32` log of 1.4 million samples at 10³³). The same log
+/// multiplied by a power of two must give the same T and L and the gain multiplied by it,
+/// exactly: in `f32` from 2⁻¹⁰⁰ to 2¹²³ (the largest sample just under 2¹²⁷), in `f64` from
+/// 2⁻¹⁰⁰⁰ to 2¹⁰¹⁹, and the attack's long `f32` log at 2¹¹⁰.
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "2 000 fits of 2 200 samples and two of 1.4 million: hours under Miri; runs natively in every CI run"
+)]
+fn a_log_scaled_by_a_power_of_two_gives_the_same_model_scaled() {
+    let f = fopdt_response(5.0, 1.5);
+    let (pre, n, h) = (200, 2_000, 0.05);
+    let y32 = log_of::<f32>(&f, pre, n, h, 10.0, 0.8, 0.004, 7);
+    let y64 = log_of::<f64>(&f, pre, n, h, 10.0, 0.8, 0.004, 7);
+    for k in -100i32..=123 {
+        let scale = 2f32.powi(k);
+        assert_eq!(scale.log2(), k as f32, "2^{k} written exactly");
+        let (one, scaled) = models_at_scale(&y32, pre, h as f32, scale);
+        let one = one.unwrap();
+        let scaled = scaled.unwrap_or_else(|e| panic!("f32 at 2^{k}: {e}"));
+        assert_eq!(scaled.gain, one.gain * scale, "f32 gain at 2^{k}");
+        assert_eq!(scaled.time_constant, one.time_constant, "f32 T at 2^{k}");
+        assert_eq!(scaled.dead_time, one.dead_time, "f32 L at 2^{k}");
+    }
+    for k in -1000i32..=1019 {
+        let scale = 2f64.powi(k);
+        assert_eq!(scale.log2(), f64::from(k), "2^{k} written exactly");
+        let (one, scaled) = models_at_scale(&y64, pre, h, scale);
+        let one = one.unwrap();
+        let scaled = scaled.unwrap_or_else(|e| panic!("f64 at 2^{k}: {e}"));
+        assert_eq!(scaled.gain, one.gain * scale, "f64 gain at 2^{k}");
+        assert_eq!(scaled.time_constant, one.time_constant, "f64 T at 2^{k}");
+        assert_eq!(scaled.dead_time, one.dead_time, "f64 L at 2^{k}");
+    }
+    // The attack's log: 400 000 samples before the step and a million after, level 1 and
+    // change 1/100, in f32; then at 2¹¹⁰ (about 10³³), whose plain sums overflow.
+    let long = log_of::<f32>(
+        &fopdt_response(60.0, 8.0),
+        400_000,
+        1_000_000,
+        0.001,
+        1.0,
+        0.01,
+        0.0,
+        1,
+    );
+    let scale = 2f32.powi(110);
+    let (one, scaled) = models_at_scale(&long, 400_000, 0.001, scale);
+    let one = one.unwrap();
+    let scaled = scaled.unwrap_or_else(|e| panic!("the long f32 log at 2^110: {e}"));
+    assert_eq!(scaled.gain, one.gain * scale);
+    assert_eq!(scaled.time_constant, one.time_constant);
+    assert_eq!(scaled.dead_time, one.dead_time);
+}
+
+/// The samples' rounding as a fraction of the change, as the module docs state it: ε/2 times
+/// the largest sample's magnitude (at least the type's smallest normal value), in `f64`.
+fn rounding_nu<F: regler_pid::Real>(
+    y: &[F],
+    epsilon: f64,
+    smallest_normal: f64,
+    change: f64,
+) -> f64 {
+    let m = y
+        .iter()
+        .map(|v| v.to_f64_exact().abs())
+        .fold(smallest_normal, f64::max);
+    // As a fraction first: ε/2 times f64's smallest normal value underflows.
+    epsilon / 2.0 * (m / change.abs())
+}
+
+/// Attack finding (break 5): the stated tolerance assumed the change spans thousands of ulps
+/// of the samples, which a subnormal change does not (an `f32` step of 10⁻⁴⁴, 7 ulps, gave
+/// T = 9.12 for 10 with ±0.34 allowed), nor a change under a large baseline. The samples'
+/// rounding is noise: with ν at least half an ulp of the largest sample as a fraction of the
+/// change, every noise-free FOPDT log is recovered within the stated tolerance — changes of 2
+/// to 2²³ ulps of the smallest subnormal (`f32` and `f64`), and normal changes under baselines
+/// up to 10⁶ times them — and a change of one ulp is no response.
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "a few hundred fits of 1 100 samples: an hour under Miri; runs natively in every CI run"
+)]
+fn a_change_of_few_ulps_is_recovered_with_its_rounding_counted_as_noise() {
+    use regler_pid::tuning::IdentifyError;
+    let (t, l, h, pre, n) = (10.0, 2.0, 0.1, 100, 1_000);
+    let f = fopdt_response(t, l);
+    fn check<F: regler_pid::Real>(
+        y: &[F],
+        change: f64,
+        nu: f64,
+        (t, l, h, pre, n): (f64, f64, f64, usize, usize),
+        what: &str,
+    ) {
+        match identify(y, pre, h, 1.0) {
+            Ok(m) => assert!(
+                nu < 0.5 && within_tolerance(&m, change, t, l, h, nu, n),
+                "{what}: {m:?} with ν = {nu}"
+            ),
+            Err(e) => assert!(
+                nu >= 0.5 && e == IdentifyError::<f64>::NoResponse.to_string(),
+                "{what}: {e} with ν = {nu}"
+            ),
+        }
+    }
+    let ulps = [
+        1.0,
+        2.0,
+        3.0,
+        5.0,
+        7.0,
+        10.0,
+        14.0,
+        20.0,
+        33.0,
+        50.0,
+        77.0,
+        100.0,
+        300.0,
+        1e3,
+        1e4,
+        1e5,
+        1e6,
+        8_388_607.0,
+    ];
+    for &u in &ulps {
+        for sign in [1.0, -1.0] {
+            let c32 = sign * u * f64::from(f32::from_bits(1));
+            let y = log_of::<f32>(&f, pre, n, h, 0.0, c32, 0.0, 1);
+            check(
+                &y,
+                c32,
+                rounding_nu(
+                    &y,
+                    f64::from(f32::EPSILON),
+                    f64::from(f32::MIN_POSITIVE),
+                    c32,
+                ),
+                (t, l, h, pre, n),
+                &format!("f32, {u} ulps"),
+            );
+            let c64 = sign * u * f64::from_bits(1);
+            let y = log_of::<f64>(&f, pre, n, h, 0.0, c64, 0.0, 1);
+            check(
+                &y,
+                c64,
+                rounding_nu(&y, f64::EPSILON, f64::MIN_POSITIVE, c64),
+                (t, l, h, pre, n),
+                &format!("f64, {u} ulps"),
+            );
+        }
+    }
+    for base_in_change in [1e3, 1e4, 3e4, 1e5, 3e5, 1e6] {
+        for change in [0.37f64, -2.5e-3, 6e7] {
+            let base = base_in_change * change.abs();
+            let y = log_of::<f32>(&f, pre, n, h, base, change, 0.0, 1);
+            check(
+                &y,
+                change,
+                rounding_nu(
+                    &y,
+                    f64::from(f32::EPSILON),
+                    f64::from(f32::MIN_POSITIVE),
+                    change,
+                ),
+                (t, l, h, pre, n),
+                &format!("f32, base {base}, change {change}"),
+            );
+        }
+    }
+}
+
+/// Attack finding (second attack, re-checking the slack fix): the tolerance for a negative
+/// dead time was computed in seconds, h + 2 % (T + L) + ν·(T + L + 10·h·√N), which overflowed
+/// for an h at which T + L still fit (a noise-free lag refused as an overflow at h = 2·10³⁰⁶).
+/// It is judged in samples now, so the verdict cannot depend on h: at every power of two h
+/// from the smallest normal value up, a first-order log gives T and L exactly h times the fit
+/// at h = 1 and a two-lag log is `NotFopdt`, until T + L itself overflows, where it is named.
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "4 000 fits of 1 000 samples: hours under Miri; runs natively in every CI run"
+)]
+fn the_verdict_and_the_fit_in_samples_do_not_depend_on_the_sample_period() {
+    use regler_pid::tuning::{IdentifyError, identify_step};
+    let lag: Vec<f64> = (0..1000)
+        .map(|k| {
+            if k < 30 {
+                0.0
+            } else {
+                1.0 - (-(f64::from(k) - 30.0) / 50.0).exp()
+            }
+        })
+        .collect();
+    let two_lags: Vec<f64> = (0..1000)
+        .map(|i| {
+            let t = f64::from(i);
+            1.0 - 0.5 * (-t).exp() - 0.5 * (-t / 100.0).exp()
+        })
+        .collect();
+    let unit = identify_step(&lag, 1.0, 1.0).unwrap();
+    assert_eq!(
+        identify_step(&two_lags, 1.0, 1.0),
+        Err(IdentifyError::NotFopdt)
+    );
+    let overflow = IdentifyError::Overflow("T + L (the sample period times the log)");
+    for k in -1022i32..=1023 {
+        let h = 2f64.powi(k);
+        assert_eq!(h.log2(), f64::from(k), "2^{k} written exactly");
+        match identify_step(&lag, h, 1.0) {
+            Ok(m) => {
+                assert_eq!(m.gain, unit.gain, "h = 2^{k}");
+                assert_eq!(m.time_constant, unit.time_constant * h, "h = 2^{k}");
+                assert_eq!(m.dead_time, unit.dead_time * h, "h = 2^{k}");
+            }
+            Err(e) => assert!(
+                ((unit.time_constant + unit.dead_time) * h).is_infinite() && e == overflow,
+                "h = 2^{k}: {e}"
+            ),
+        }
+        // The two lags' T + L is about 50.5 samples: it overflows from h = 2¹⁰¹⁹.
+        let got = identify_step(&two_lags, h, 1.0);
+        assert!(
+            got == Err(IdentifyError::NotFopdt) || (k >= 1019 && got == Err(overflow)),
+            "two lags, h = 2^{k}: {got:?}"
+        );
+    }
 }
