@@ -433,12 +433,7 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
             q.tail_arrival = arrival;
         }
         self.len = self.len.saturating_add(1);
-        if self
-            .next_arrival
-            .is_none_or(|a| a.wrapping_sub(now) > arrival.wrapping_sub(now))
-        {
-            self.next_arrival = Some(arrival);
-        }
+        self.next_arrival = Some(earliest(self.next_arrival, arrival, now));
         Ok(())
     }
 
@@ -529,10 +524,8 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
                         self.next_reset = Some(reset_at);
                     }
                 }
-                if head != NIL
-                    && next.is_none_or(|n| n.wrapping_sub(now) > head_arrival.wrapping_sub(now))
-                {
-                    next = Some(head_arrival);
+                if head != NIL {
+                    next = Some(earliest(next, head_arrival, now));
                 }
             }
         }
@@ -548,10 +541,8 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
                     q.reset_at = None;
                     on_event(TipperEvent::Reset { tipper });
                 }
-                Some(at) if next.is_none_or(|n| n.wrapping_sub(now) > at.wrapping_sub(now)) => {
-                    next = Some(at);
-                }
-                _ => {}
+                Some(at) => next = Some(earliest(next, at, now)),
+                None => {}
             }
         }
         self.next_reset = next;
@@ -595,9 +586,7 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
                 slot.arrival = now.wrapping_add(scaled);
                 if index == q.head {
                     q.head_arrival = slot.arrival;
-                    if next.is_none_or(|n| n.wrapping_sub(now) > scaled) {
-                        next = Some(slot.arrival);
-                    }
+                    next = Some(earliest(next, slot.arrival, now));
                 }
                 if index == q.tail {
                     q.tail_arrival = slot.arrival;
@@ -790,14 +779,18 @@ impl<K: Copy, const N: usize, const T: usize> Tracker<K, N, T> {
             if let Some(q) = self.tippers.get_mut(h.tipper) {
                 q.reset_at = Some(at);
             }
-            if self
-                .next_reset
-                .is_none_or(|n| n.wrapping_sub(snapshot.now) > h.remaining)
-            {
-                self.next_reset = Some(at);
-            }
+            self.next_reset = Some(earliest(self.next_reset, at, snapshot.now));
         }
         Ok(())
+    }
+}
+
+/// Whichever of `next` and `at` comes first counting from `now` on the wrapping clock (`next`
+/// on a tie; `at` when there is no `next`): the one deadline the tracker keeps per kind of event.
+fn earliest(next: Option<u32>, at: u32, now: u32) -> u32 {
+    match next {
+        Some(n) if n.wrapping_sub(now) <= at.wrapping_sub(now) => n,
+        _ => at,
     }
 }
 
@@ -808,6 +801,23 @@ fn index_usize(index: u32) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The deadline kept is the one nearer in time from `now` on the wrapping clock, the one
+    /// already kept on a tie, the new one when none was kept: over clocks about to wrap.
+    #[test]
+    fn earliest_is_the_nearer_deadline_across_the_wrap() {
+        for now in [0u32, 1, 1 << 31, u32::MAX - 1, u32::MAX] {
+            for a in [0u32, 1, 2, 1000, (1 << 31) - 1, 1 << 31, u32::MAX] {
+                let at = now.wrapping_add(a);
+                assert_eq!(earliest(None, at, now), at);
+                for b in [0u32, 1, 2, 999, 1000, 1001, 1 << 31, u32::MAX] {
+                    let n = now.wrapping_add(b);
+                    let want = if b <= a { n } else { at };
+                    assert_eq!(earliest(Some(n), at, now), want, "now {now}, +{b} and +{a}");
+                }
+            }
+        }
+    }
     use crate::table::{CorrectionError, TableError};
     use std::vec::Vec;
     type Events = Vec<(u32, TipperEvent<u16>)>;
