@@ -535,6 +535,70 @@ mod tests {
         Ok(taken)
     }
 
+    /// The gate's corners are not vacuous: for a PID with feed-forward-sized ranges, most
+    /// corners take the raw path in every type (the rest leave the integral's bounds).
+    #[test]
+    fn the_gate_corners_of_a_pid_take_the_raw_path() {
+        let config = Config {
+            kind: Kind::PID,
+            k: 2.0,
+            ti: 5.0,
+            td: 0.5,
+            h: 0.1,
+            ymin: -10.0,
+            ymax: 10.0,
+            ..Config::default()
+        };
+        let corners = if cfg!(miri) { 2 * 14 } else { 2 * 512 };
+        for (name, taken) in [
+            (
+                "I16F16",
+                gate_corners_are_the_checked_update::<I16F16>(&config),
+            ),
+            (
+                "I8F24",
+                gate_corners_are_the_checked_update::<I8F24>(&config),
+            ),
+            (
+                "I32F32",
+                gate_corners_are_the_checked_update::<I32F32>(&config),
+            ),
+            (
+                "I48F16",
+                gate_corners_are_the_checked_update::<I48F16>(&config),
+            ),
+        ] {
+            let taken = taken.unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert!(taken > corners / 4, "{name}: {taken} of {corners}");
+        }
+    }
+
+    /// A gate at the edge of its bound: a P controller in `I16F16` whose largest value at the
+    /// corners of the gate twice as wide, v − u_old = kp·4g + 6g with g = 16, is the type's
+    /// range plus 2⁻²¹ of it. The gate is 16 (2²⁰ LSB), the corners of that gate are exact, and
+    /// so every margin of the bound must hold: a limit loosened by 2⁻²⁰ of the range admits
+    /// the wider gate, whose corners wrap.
+    #[test]
+    fn a_gate_at_the_edge_of_its_bound_keeps_its_corners_exact() {
+        let max = I16F16::MAX.to_num::<f64>();
+        let k = (max * (1.0 + 1.0 / 2_097_152.0) - 96.0) / 64.0;
+        let config = Config {
+            kind: Kind::P,
+            k,
+            h: 0.1,
+            ymin: -10.0,
+            ymax: 10.0,
+            ..Config::default()
+        };
+        let pid = Pid::<I16F16>::new(&config).unwrap();
+        assert_eq!(
+            pid.fast_gate, 20,
+            "the premise: g = 16 is the widest gate that fits"
+        );
+        let taken = gate_corners_are_the_checked_update::<I16F16>(&config).unwrap();
+        assert!(taken > 0);
+    }
+
     /// With bounds of half-width i_half = `MAX` (a wide output range in a narrow type), an
     /// integral more than the type's range from the bounds' centre was accepted by the old
     /// common sample (centre − I saturated to `MAX`, which passed |·| ≤ `MAX`); the bound holds
@@ -804,6 +868,68 @@ mod tests {
         }
     }
 
+    /// Every value the gate admits set at one of its ends at once — set-point, measurement,
+    /// feed-forward, tracking value and the states I, D, y_old and u_old each at −g or
+    /// g − 1 LSB, the gate g the configuration's own — on a started controller: the sample
+    /// gives the checked update's result bit for bit, with and without feed-forward and
+    /// tracking. These corners are where the gate's bound is spent; a gate wider than its bound
+    /// allows wraps at one of them. Returns how many samples took the raw path.
+    fn gate_corners_are_the_checked_update<T: FromRaw>(config: &Config) -> Result<usize, String> {
+        let Ok(mut pid) = Pid::<T>::new(config) else {
+            return Ok(0);
+        };
+        let k = u32::from(pid.fast_gate);
+        let bits = 8 * u32::try_from(core::mem::size_of::<T>()).unwrap_or(4);
+        if k + 1 >= bits {
+            return Ok(0);
+        }
+        let _ = pid.update(T::ZERO, T::ZERO);
+        let g = 1i64 << k;
+        let ends = [T::from_raw(-g, 0), T::from_raw(g - 1, 0)];
+        let mut taken = 0;
+        let step = if cfg!(miri) { 37 } else { 1 };
+        for corner in (0u32..512).step_by(step) {
+            let at = |bit: u32| ends[usize::from(corner >> bit & 1 == 1)];
+            let mut start = pid.clone();
+            start.i = at(0);
+            start.d = at(1);
+            start.yd_old = at(2);
+            start.u_old = at(3);
+            let (r, y, f, t) = (at(4), at(5), at(6), at(7));
+            let track = (corner >> 8 & 1 == 1).then_some(t);
+            for with in [false, true] {
+                let (mut fast, mut slow) = (start.clone(), start.clone());
+                let (a, b) = if with {
+                    taken += usize::from(
+                        T::raw_step::<true>(&mut start.clone(), r, y, f, track).is_some(),
+                    );
+                    let inputs = Inputs {
+                        feedforward: f,
+                        track,
+                    };
+                    (
+                        fast.update_with(r, y, inputs),
+                        checked::<T, true>(&mut slow, r, y, f, track),
+                    )
+                } else {
+                    taken += usize::from(
+                        T::raw_step::<false>(&mut start.clone(), r, y, T::ZERO, None).is_some(),
+                    );
+                    (
+                        fast.update(r, y),
+                        checked::<T, false>(&mut slow, r, y, T::ZERO, None),
+                    )
+                };
+                if a != b || fast != slow {
+                    return Err(format!(
+                        "corner {corner:09b}, feed-forward {with}: {a:?} {b:?}\n{fast:?}\n{slow:?}"
+                    ));
+                }
+            }
+        }
+        Ok(taken)
+    }
+
     proptest! {
         #![proptest_config(cases())]
 
@@ -818,6 +944,20 @@ mod tests {
                 same_as_checked::<I8F24>(&config, &ops),
                 same_as_checked::<I32F32>(&config, &ops),
                 same_as_checked::<I48F16>(&config, &ops),
+            ] {
+                prop_assert!(result.is_ok(), "{}", result.err().unwrap_or_default());
+            }
+        }
+
+        /// The gate's corners (see [`gate_corners_are_the_checked_update`]) in four types, over
+        /// configurations of every kind and scale; some corners take the raw path.
+        #[test]
+        fn every_corner_of_the_gate_is_the_checked_update(config in configs()) {
+            for result in [
+                gate_corners_are_the_checked_update::<I16F16>(&config),
+                gate_corners_are_the_checked_update::<I8F24>(&config),
+                gate_corners_are_the_checked_update::<I32F32>(&config),
+                gate_corners_are_the_checked_update::<I48F16>(&config),
             ] {
                 prop_assert!(result.is_ok(), "{}", result.err().unwrap_or_default());
             }
