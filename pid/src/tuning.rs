@@ -39,15 +39,24 @@
 //! whole log). Without samples before the step the baseline is one sample and its noise
 //! enters the model unaveraged (tested noise-free only).
 //!
-//! The samples' rounding counts as noise: ν is at least ε/2 times the largest sample's
-//! magnitude (at least the smallest normal value), over the change — half an ulp of the
-//! largest sample to one ulp. So a change of few ulps is fitted within the same tolerance, or
-//! refused: tested noise-free with changes of 1 to 2²³ − 1 ulps of the smallest subnormal
-//! value in `f32` and `f64` (one ulp is [`IdentifyError::NoResponse`]), and `f32` changes under
-//! baselines up to 10⁶ times them. The means are sums of deviations from their first sample:
-//! a log multiplied by a power of two gives the same T and L and the gain multiplied by it,
-//! exactly, up to the type's largest value (tested from 2⁻¹⁰⁰ to 2¹²³ in `f32`, 2⁻¹⁰⁰⁰ to
-//! 2¹⁰¹⁹ in `f64`, and a log of 1.4 million `f32` samples at 2¹¹⁰).
+//! The samples' own rounding adds to that tolerance. With ρ = ε times the largest sample's
+//! magnitude (at least the type's smallest normal value), over the fitted change |K·step| —
+//! one to two ulps of the largest sample, as a fraction of the change — K is within the
+//! tolerance above plus ρ of the fitted K, and T and L plus ρ·(10·(T + L) + 4·D): the baseline
+//! and the final value are each off by up to half an ulp, an error that no averaging removes
+//! and that the areas integrate over the whole log. ρ is 10⁻¹⁶ × the baseline's ratio to the
+//! change in `f64` and 10⁻⁷ × in `f32`: it matters only for a change of few ulps, a subnormal
+//! change or one under a baseline 10⁵ times larger in `f32`. Tested noise-free with changes of
+//! 1 to 2²³ − 1 ulps of the smallest subnormal value in `f32` and `f64`, and with `f32`
+//! changes under baselines up to 10⁶ times them, at the offsets from the float grid that round
+//! the baseline and the final value apart (a change of one ulp is
+//! [`IdentifyError::NoResponse`]). The rules below allow for the rounding too.
+//!
+//! The means are sums of deviations from their first sample: a log multiplied by a power of
+//! two gives the same T and L and the gain multiplied by it, exactly, while the samples stay
+//! normal and within the type's largest value (tested from 2⁻¹⁰⁰ to 2¹²³ in `f32`, 2⁻¹⁰⁰⁰
+//! to 2¹⁰²³ in `f64`, noisy logs of 10⁵ and 10⁶ samples, a log of 1.4 million `f32` samples at
+//! 2¹¹⁰, and a change of 0.995 × `f64::MAX` from a negative baseline).
 //!
 //! A noise-free first-order log shorter than that (1 to 8 T past the dead time, tested) is
 //! refused when shorter than 5 T and otherwise gives K within 1 % and T and L within 4 % of
@@ -58,18 +67,18 @@
 //! oscillating at the end of the log is not its own noise), otherwise the larger of that and
 //! half the largest change between neighbouring samples of the last tenth:
 //! - it has not settled: the mean of the last tenth differs from the mean of the tenth before
-//!   by more than 0.2 % of the change plus 4·noise/√(samples in a tenth)
+//!   by more than 0.2 % of the change plus 4·noise/√(samples in a tenth) plus ρ of it
 //!   ([`IdentifyError::NotSettled`]; an integrating process's ramp ends here);
-//! - the change is within twice the noise, the samples' rounding included
-//!   ([`IdentifyError::NoResponse`]);
+//! - the change is within twice the noise plus ρ of it (the rounding's peak, twice)
+//!   ([`IdentifyError::NoResponse`]: a change of one ulp is none);
 //! - it rises above its final level (the last tenth's mean) by more than 1 % of the change
-//!   plus twice the noise ([`IdentifyError::Overshoot`]: an underdamped or oscillating
+//!   plus twice the noise plus 2ρ of it ([`IdentifyError::Overshoot`]: an underdamped or oscillating
 //!   response), or first goes the wrong way by as much ([`IdentifyError::Undershoot`]: an
 //!   inverse response);
 //! - the fitted T is not positive or L is below minus the tolerance above
 //!   ([`IdentifyError::NotFopdt`]);
-//! - the change, the gain change/step or T + L overflow the float type
-//!   ([`IdentifyError::Overflow`]).
+//! - the change, the gain change/step, T + L or T overflow the float type, or the samples
+//!   before the step or a tail span more than its largest value ([`IdentifyError::Overflow`]).
 //!
 //! Tested: second-order responses with an overshoot of 2 % or more, inverse responses that go
 //! the wrong way by 2 % or more, and integrating processes, with noise up to 0.2 % of the
@@ -410,8 +419,8 @@ pub enum IdentifyError<F = f64> {
     /// came out not positive or the dead time clearly negative).
     NotFopdt,
     /// A quantity (named) overflows the float type: a change (final value − baseline) beyond
-    /// its largest value, or a step so small that change / step does not fit, or T + L (a
-    /// huge sample period).
+    /// its largest value, or a step so small that change / step does not fit, or T + L or T
+    /// (a huge sample period), or a mean (samples spanning more than the largest value).
     Overflow(&'static str),
 }
 
@@ -525,14 +534,26 @@ fn count<F: Real>(n: usize) -> F {
 /// of the deviations from the first sample, so it overflows only when the count times the
 /// part's spread does, not the count times its level (an attack found a log of 1.4 million
 /// `f32` samples at 10³³ refused); and a power-of-two scaling of the samples scales the mean
-/// exactly.
+/// exactly. Should the deviations' sum still overflow (a long noisy part near the type's
+/// largest value), each deviation is divided by the count before it is summed: the mean then
+/// overflows only when a deviation does (a part spanning more than the type's largest value).
 fn mean_and_spread<F: Real>(part: &[F]) -> (F, F) {
     let reference = part.first().copied().unwrap_or_else(F::zero);
+    let n = count::<F>(part.len().max(1));
     let mut s = Sum::new();
     for &v in part {
         s.add(v - reference);
     }
-    let mean = reference + s.value() / count::<F>(part.len().max(1));
+    let mut shift = s.value() / n;
+    if !shift.is_finite() {
+        let inverse = F::one() / n;
+        let mut s = Sum::new();
+        for &v in part {
+            s.add((v - reference) * inverse);
+        }
+        shift = s.value();
+    }
+    let mean = reference + shift;
     let mut spread = F::zero();
     for &v in part {
         let d = (v - mean).abs();
@@ -647,20 +668,18 @@ pub fn identify_step_at<F: Real>(
     if !(change.is_finite() && y0.is_finite()) {
         return Err(IdentifyError::Overflow("the change (the samples' mean)"));
     }
-    // The noise as a fraction of the change. The samples' rounding is noise of its own: ε/2
-    // times the largest sample (half an ulp of it to one ulp), so a change of a few ulps (a
-    // subnormal change, or one under a large baseline) is judged by its rounding. Computed as
-    // a fraction: half an ulp of a subnormal is not representable.
-    let measured = noise / change.abs();
-    let rounding = F::epsilon() * (largest / change.abs()) * c::<F>(0.5);
-    let relative_noise = if rounding > measured {
-        rounding
-    } else {
-        measured
-    };
+    // The noise ν and the samples' rounding ρ, as fractions of the change. A sample is rounded
+    // by at most half an ulp of the largest, and ε times the largest sample (at least the
+    // smallest normal value: the ulp of subnormals is fixed) is one to two ulps of it, so the
+    // baseline and the final value, means of rounded samples, are each off by at most ρ/2 of
+    // the change — an error no averaging removes. Computed as fractions: half an ulp of a
+    // subnormal is not representable.
+    let relative_noise = noise / change.abs();
+    let rounding = F::epsilon() * (largest / change.abs());
     let two = F::from_u16(2);
-    // Within twice the noise (NaN: a change of 0 without noise).
-    if relative_noise.is_nan() || two * relative_noise >= F::one() {
+    // Within twice the noise, the rounding's peak (ρ/2) included; NaN: a change of 0.
+    let peak = relative_noise + rounding * c::<F>(0.5);
+    if peak.is_nan() || two * peak >= F::one() {
         return Err(IdentifyError::NoResponse);
     }
     if !(change / step).is_finite() {
@@ -677,15 +696,27 @@ pub fn identify_step_at<F: Real>(
     if !moving.is_finite() {
         return Err(IdentifyError::Overflow("the change (the samples' mean)"));
     }
-    let allowed = c::<F>(0.002) + c::<F>(4.0) * relative_noise / sqrt(count::<F>(tail_len));
+    let allowed =
+        c::<F>(0.002) + c::<F>(4.0) * relative_noise / sqrt(count::<F>(tail_len)) + rounding;
     if moving > allowed {
         return Err(IdentifyError::NotSettled(moving));
     }
     let late = y_final;
     // The normalised response r = (y − y0)/change goes from 0 to 1 and never leaves 0..=1
-    // for an FOPDT process; beyond 1 % of the change plus twice the noise it is another shape.
-    let unit = |v: F| (v - y0) / change;
-    let margin = c::<F>(0.01) + two * relative_noise;
+    // for an FOPDT process; beyond 1 % of the change plus twice the noise (and twice the
+    // rounding: r is off by up to 2ρ) it is another shape.
+    let half = c::<F>(0.5);
+    // v − y0 overflows only for a sample beyond the final value of a change near the type's
+    // largest value, both then normal and large: halving them is exact, and so is the result.
+    let unit = |v: F| {
+        let d = v - y0;
+        if d.is_finite() {
+            d / change
+        } else {
+            (v * half - y0 * half) / (change * half)
+        }
+    };
+    let margin = c::<F>(0.01) + two * (relative_noise + rounding);
     let (mut lo, mut hi) = (F::infinity(), F::neg_infinity());
     for &v in response {
         let r = unit(v);
@@ -700,7 +731,6 @@ pub fn identify_step_at<F: Real>(
         return Err(IdentifyError::Undershoot(-lo));
     }
     // A0 = ∫(1 − r) dt by the trapezoidal rule: h·(Σ(1 − r) − ends/2).
-    let half = c::<F>(0.5);
     let first = F::one() - unit(response.first().copied().unwrap_or(y0));
     let last = F::one() - unit(response.last().copied().unwrap_or(y_final));
     let mut a0 = Sum::new();
@@ -739,22 +769,23 @@ pub fn identify_step_at<F: Real>(
     a1.add((previous + end) * half * frac);
     let e = F::from_f64_nearest(core::f64::consts::E);
     let a1 = e * a1.value(); // T/h
-    // A dead time a little below zero is sampling error and noise (the stated tolerance);
-    // below that it is another shape. Judged in samples (the times over h), before the times
-    // in seconds: the tolerance h + 2 % (T + L) + ν·(T + L + 10·D/√N) is, over h,
-    // 1 + 2 % A0 + ν·(A0 + 10·√N), which never overflows, and the verdict is the same for
-    // every h (in seconds it overflowed where T + L did not, and a NaN or infinite tolerance
-    // switched the check off).
+    // A dead time a little below zero is sampling error, noise and rounding (the stated
+    // tolerance); below that it is another shape. Judged in samples (the times over h), before
+    // the times in seconds: the tolerance h + 2 % (T + L) + ν·(T + L + 10·D/√N) +
+    // ρ·(10·(T + L) + 4·D) is, over h, 1 + 2 % A0 + ν·(A0 + 10·√N) + ρ·(10·A0 + 4·N), which
+    // never overflows, and the verdict is the same for every h (in seconds it overflowed where
+    // T + L did not, and a NaN or infinite tolerance switched the check off).
     let slack = F::one()
         + c::<F>(0.02) * a0
-        + relative_noise * (a0 + c::<F>(NOISE_LOG_FACTOR) * sqrt(count::<F>(n)));
+        + relative_noise * (a0 + c::<F>(NOISE_LOG_FACTOR) * sqrt(count::<F>(n)))
+        + rounding * (c::<F>(10.0) * a0 + c::<F>(4.0) * count::<F>(n));
     if a1.is_nan() || a1 <= F::zero() || a0 - a1 < -slack {
         return Err(IdentifyError::NotFopdt);
     }
     let time_constant = a1 * h;
     if !time_constant.is_finite() {
         return Err(IdentifyError::Overflow(
-            "T + L (the sample period times the log)",
+            "T (the sample period times the log)",
         ));
     }
     let dead_time = t_ar - time_constant;
