@@ -206,10 +206,9 @@ impl<const T: usize> DistanceTable<T> {
         }
         let mut da = [0u32; T];
         for (tipper, (d, &sa)) in da.iter_mut().zip(self.static_list()).enumerate() {
-            *d = correct(sa, dia, self.sia).map_err(|e| match e {
-                CorrectionError::ZeroReference => TableError::ZeroReference,
-                _ => TableError::Overflow { tipper },
-            })?;
+            // SIA is never 0 (`new` refuses it, nothing else sets it, a table is not
+            // deserialized): the only error left is the overflow.
+            *d = correct(sa, dia, self.sia).map_err(|_| TableError::Overflow { tipper })?;
         }
         Ok(da)
     }
@@ -282,12 +281,15 @@ pub(crate) const fn stretch_per_mille(sia: u32, dia: u32) -> i32 {
     let Some(q) = rounded.checked_div(dia) else {
         return 0;
     };
+    // q ≥ −1 001: SIA ≥ 0 makes (SIA − DIA)/DIA ≥ −1, so only the top can leave an `i32`
+    // (`stretch_per_mille(0, u32::MAX)` is −1 000).
     if q > i32::MAX as i64 {
         i32::MAX
-    } else if q < i32::MIN as i64 {
-        i32::MIN
     } else {
-        #[allow(clippy::cast_possible_truncation, reason = "range checked just above")]
+        #[allow(
+            clippy::cast_possible_truncation,
+            reason = "−1 001 ≤ q ≤ i32::MAX, checked just above"
+        )]
         let q = q as i32;
         q
     }
@@ -400,5 +402,46 @@ mod tests {
         assert_eq!(stretch_per_mille(3000, 3000), 0);
         assert_eq!(stretch_per_mille(1, 0), 0);
         assert_eq!(stretch_per_mille(u32::MAX, 1), i32::MAX);
+        assert_eq!(stretch_per_mille(0, u32::MAX), -1000);
+        assert_eq!(stretch_per_mille(0, 1), -1000);
+    }
+
+    /// Against the formula in `i128`, rounded half away from zero and saturated, at the ends of
+    /// both counts and around them: the lowest value is −1 000 (SIA 0), never near `i32::MIN`.
+    #[test]
+    fn stretch_matches_the_formula_at_the_ends() {
+        let values = [
+            0u32,
+            1,
+            2,
+            3,
+            999,
+            1000,
+            2985,
+            3000,
+            4_294_967,
+            1 << 31,
+            u32::MAX - 1,
+            u32::MAX,
+        ];
+        for &sia in &values {
+            for &dia in &values {
+                let want = if dia == 0 {
+                    0
+                } else {
+                    let (s, d) = (i128::from(sia), i128::from(dia));
+                    let scaled = (s - d) * 1000;
+                    let rounded = if scaled >= 0 {
+                        scaled + d / 2
+                    } else {
+                        scaled - d / 2
+                    };
+                    let q = rounded / d;
+                    i32::try_from(q.clamp(i128::from(i32::MIN), i128::from(i32::MAX))).unwrap()
+                };
+                assert_eq!(stretch_per_mille(sia, dia), want, "SIA {sia}, DIA {dia}");
+                assert!(want >= -1000);
+            }
+        }
     }
 }
