@@ -53,10 +53,15 @@
 //! [`IdentifyError::NoResponse`]). The rules below allow for the rounding too.
 //!
 //! The means are sums of deviations from their first sample: a log multiplied by a power of
-//! two gives the same T and L and the gain multiplied by it, exactly, while the samples stay
-//! normal and within the type's largest value (tested from 2⁻¹⁰⁰ to 2¹²³ in `f32`, 2⁻¹⁰⁰⁰
-//! to 2¹⁰²³ in `f64`, noisy logs of 10⁵ and 10⁶ samples, a log of 1.4 million `f32` samples at
-//! 2¹¹⁰, and a change of 0.995 × `f64::MAX` from a negative baseline).
+//! two gives the same T and L and the gain multiplied by it, exactly, as long as the change
+//! fits the type and the means' deviations stay normal (from 2⁻¹⁰⁰ × a log of unit level in
+//! `f32`, 2⁻¹⁰⁰⁰ × in `f64`: below, a subnormal deviation loses bits) — tested from 2⁻¹⁰⁰ to
+//! 2¹²³ in `f32`, 2⁻¹⁰⁰⁰ to 2¹⁰²³ in `f64`, noisy logs of 10⁵ and 10⁶ samples, a log of 1.4
+//! million `f32` samples at 2¹¹⁰, a change of 0.995 × `f64::MAX` from a negative baseline, and
+//! logs whose first sample is an outlier at the scales where their means' sums overflow. The
+//! verdict does not depend on the sample period h (it is reached in samples): at a
+//! power-of-two h, T and L are exactly h times the fit at h = 1 while they stay normal, and
+//! T + L or T that overflow are named after the verdict.
 //!
 //! A noise-free first-order log shorter than that (1 to 8 T past the dead time, tested) is
 //! refused when shorter than 5 T and otherwise gives K within 1 % and T and L within 4 % of
@@ -535,8 +540,9 @@ fn count<F: Real>(n: usize) -> F {
 /// part's spread does, not the count times its level (an attack found a log of 1.4 million
 /// `f32` samples at 10³³ refused); and a power-of-two scaling of the samples scales the mean
 /// exactly. Should the deviations' sum still overflow (a long noisy part near the type's
-/// largest value), each deviation is divided by the count before it is summed: the mean then
-/// overflows only when a deviation does (a part spanning more than the type's largest value).
+/// largest value), each deviation is scaled down by a power of two at least the count before
+/// it is summed: the mean then overflows only when a deviation does (a part spanning more than
+/// the type's largest value), and is the one the plain sum would give.
 fn mean_and_spread<F: Real>(part: &[F]) -> (F, F) {
     let reference = part.first().copied().unwrap_or_else(F::zero);
     let n = count::<F>(part.len().max(1));
@@ -546,12 +552,20 @@ fn mean_and_spread<F: Real>(part: &[F]) -> (F, F) {
     }
     let mut shift = s.value() / n;
     if !shift.is_finite() {
-        let inverse = F::one() / n;
+        // Each deviation times 2⁻ᵐ (2ᵐ ≥ the count), exactly, and the sum over n·2⁻ᵐ, also
+        // exact: the same quotient, so the same mean as where the plain sum fits (a log scaled
+        // by a power of two keeps its model across the switch).
+        let half = c::<F>(0.5);
+        let (mut down, mut span) = (F::one(), n);
+        while span > F::one() {
+            span = span * half;
+            down = down * half;
+        }
         let mut s = Sum::new();
         for &v in part {
-            s.add((v - reference) * inverse);
+            s.add((v - reference) * down);
         }
-        shift = s.value();
+        shift = s.value() / (n * down);
     }
     let mean = reference + shift;
     let mut spread = F::zero();
@@ -738,15 +752,9 @@ pub fn identify_step_at<F: Real>(
         a0.add(F::one() - unit(v));
     }
     a0.add(-(first + last) * half);
+    // Everything up to the verdict is in samples (the times over h), so the verdict is the same
+    // for every h; the times in seconds, and their overflow, come after it.
     let a0 = a0.value(); // (T + L)/h
-    let t_ar = a0 * h; // T + L
-    // Checked before it is used to count samples: an infinite T + L (a huge h) would otherwise
-    // be refused as "not FOPDT".
-    if !t_ar.is_finite() {
-        return Err(IdentifyError::Overflow(
-            "T + L (the sample period times the log)",
-        ));
-    }
     // A1 = ∫₀^(T+L) r dt: whole intervals up to ⌊(T+L)/h⌋, then the partial one interpolated.
     let whole = num_traits::ToPrimitive::to_usize(&a0.floor());
     let Some(whole) = whole.filter(|&w| w.saturating_add(1) < n) else {
@@ -773,14 +781,20 @@ pub fn identify_step_at<F: Real>(
     // tolerance); below that it is another shape. Judged in samples (the times over h), before
     // the times in seconds: the tolerance h + 2 % (T + L) + ν·(T + L + 10·D/√N) +
     // ρ·(10·(T + L) + 4·D) is, over h, 1 + 2 % A0 + ν·(A0 + 10·√N) + ρ·(10·A0 + 4·N), which
-    // never overflows, and the verdict is the same for every h (in seconds it overflowed where
-    // T + L did not, and a NaN or infinite tolerance switched the check off).
+    // never overflows (in seconds it overflowed where T + L did not, and a NaN or infinite
+    // tolerance switched the check off).
     let slack = F::one()
         + c::<F>(0.02) * a0
         + relative_noise * (a0 + c::<F>(NOISE_LOG_FACTOR) * sqrt(count::<F>(n)))
         + rounding * (c::<F>(10.0) * a0 + c::<F>(4.0) * count::<F>(n));
     if a1.is_nan() || a1 <= F::zero() || a0 - a1 < -slack {
         return Err(IdentifyError::NotFopdt);
+    }
+    let t_ar = a0 * h; // T + L
+    if !t_ar.is_finite() {
+        return Err(IdentifyError::Overflow(
+            "T + L (the sample period times the log)",
+        ));
     }
     let time_constant = a1 * h;
     if !time_constant.is_finite() {

@@ -1937,7 +1937,8 @@ fn a_change_of_few_ulps_is_recovered_within_the_rounding_tolerance() {
 /// for an h at which T + L still fit (a noise-free lag refused as an overflow at h = 2·10³⁰⁶).
 /// It is judged in samples now, so the verdict cannot depend on h: at every power of two h
 /// from the smallest normal value up, a first-order log gives T and L exactly h times the fit
-/// at h = 1 and a two-lag log is `NotFopdt`, until T + L itself overflows, where it is named.
+/// at h = 1, until T + L itself overflows, where it is named; and a two-lag log is `NotFopdt`
+/// at every h, 2¹⁰²³ included (a fourth attack found the overflow named before the verdict).
 #[test]
 #[cfg_attr(
     miri,
@@ -1980,11 +1981,11 @@ fn the_verdict_and_the_fit_in_samples_do_not_depend_on_the_sample_period() {
                 "h = 2^{k}: {e}"
             ),
         }
-        // The two lags' T + L is about 50.5 samples: it overflows from h = 2¹⁰¹⁹.
-        let got = identify_step(&two_lags, h, 1.0);
-        assert!(
-            got == Err(IdentifyError::NotFopdt) || (k >= 1019 && got == Err(overflow)),
-            "two lags, h = 2^{k}: {got:?}"
+        // The verdict comes first: NotFopdt even where T + L (about 50.5 samples) overflows.
+        assert_eq!(
+            identify_step(&two_lags, h, 1.0),
+            Err(IdentifyError::NotFopdt),
+            "two lags, h = 2^{k}"
         );
     }
 }
@@ -2039,6 +2040,31 @@ fn a_noisy_log_near_the_largest_value_scales_exactly() {
     let one = one.unwrap();
     let scaled = scaled.unwrap_or_else(|e| panic!("a change of 0.995 MAX: {e}"));
     assert_eq!(scaled.gain, one.gain * 2f64.powi(1023));
+    assert_eq!(
+        (scaled.time_constant, scaled.dead_time),
+        (one.time_constant, one.dead_time)
+    );
+    // A first sample 0.25 below a baseline of −0.5, 40 samples before the step: at 2¹⁰²¹
+    // (f64) and 2¹²⁵ (f32) the sum of the deviations before the step overflows where at 2⁰ it
+    // does not; the mean, and so the model, must not change (a fourth attack found T and L a
+    // few ulps apart when the sum switched to dividing by the count).
+    let mut outlier: Vec<f64> =
+        log_of::<f64>(&fopdt_response(7.0, 3.0), 40, 200, 1.0, -0.5, 0.875, 0.0, 1);
+    for (k, v) in outlier.iter_mut().enumerate().take(40).skip(1) {
+        *v += 0.01 * (k as f64 * 1.3).sin();
+    }
+    outlier[0] = -0.75;
+    let (one, scaled) = models_at_scale(&outlier, 40, 1.0, 2f64.powi(1021));
+    let (one, scaled) = (one.unwrap(), scaled.unwrap());
+    assert_eq!(scaled.gain, one.gain * 2f64.powi(1021));
+    assert_eq!(
+        (scaled.time_constant, scaled.dead_time),
+        (one.time_constant, one.dead_time)
+    );
+    let outlier: Vec<f32> = outlier.iter().map(|&v| v as f32).collect();
+    let (one, scaled) = models_at_scale(&outlier, 40, 1.0f32, 2f32.powi(125));
+    let (one, scaled) = (one.unwrap(), scaled.unwrap());
+    assert_eq!(scaled.gain, one.gain * 2f32.powi(125));
     assert_eq!(
         (scaled.time_constant, scaled.dead_time),
         (one.time_constant, one.dead_time)
