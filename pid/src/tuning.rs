@@ -42,7 +42,8 @@
 //! The samples' own rounding adds to that tolerance. With ρ = ε times the largest sample's
 //! magnitude (at least the type's smallest normal value), over the fitted change |K·step| —
 //! one to two ulps of the largest sample, as a fraction of the change — K is within the
-//! tolerance above plus ρ of the fitted K, and T and L plus ρ·(10·(T + L) + 4·D): the baseline
+//! tolerance above plus ρ of the fitted K (plus the smallest positive value of the type where
+//! the gain is subnormal), and T and L plus ρ·(10·(T + L) + 4·D): the baseline
 //! and the final value are each off by up to half an ulp, an error that no averaging removes
 //! and that the areas integrate over the whole log. ρ is 10⁻¹⁶ × the baseline's ratio to the
 //! change in `f64` and 10⁻⁷ × in `f32`: it matters only for a change of few ulps, a subnormal
@@ -54,14 +55,14 @@
 //!
 //! The means are sums of deviations from their first sample: a log multiplied by a power of
 //! two gives the same T and L and the gain multiplied by it, exactly, as long as the change
-//! fits the type and the means' deviations stay normal (from 2⁻¹⁰⁰ × a log of unit level in
+//! fits the type, the gain is normal, and the means' deviations stay normal (from 2⁻¹⁰⁰ × a log of unit level in
 //! `f32`, 2⁻¹⁰⁰⁰ × in `f64`: below, a subnormal deviation loses bits) — tested from 2⁻¹⁰⁰ to
 //! 2¹²³ in `f32`, 2⁻¹⁰⁰⁰ to 2¹⁰²³ in `f64`, noisy logs of 10⁵ and 10⁶ samples, a log of 1.4
 //! million `f32` samples at 2¹¹⁰, a change of 0.995 × `f64::MAX` from a negative baseline, and
 //! logs whose first sample is an outlier at the scales where their means' sums overflow. The
 //! verdict does not depend on the sample period h (it is reached in samples): at a
 //! power-of-two h, T and L are exactly h times the fit at h = 1 while they stay normal, and
-//! T + L or T that overflow are named after the verdict.
+//! T + L or T that overflow, or a T that rounds to 0, are named after the verdict.
 //!
 //! A noise-free first-order log shorter than that (1 to 8 T past the dead time, tested) is
 //! refused when shorter than 5 T and otherwise gives K within 1 % and T and L within 4 % of
@@ -82,8 +83,9 @@
 //!   inverse response);
 //! - the fitted T is not positive or L is below minus the tolerance above
 //!   ([`IdentifyError::NotFopdt`]);
-//! - the change, the gain change/step, T + L or T overflow the float type, or the samples
-//!   before the step or a tail span more than its largest value ([`IdentifyError::Overflow`]).
+//! - the change, the gain change/step, T + L or T overflow the float type (the means never
+//!   do: a mean of values of the type is one) ([`IdentifyError::Overflow`]), or the gain or
+//!   T round to 0 ([`IdentifyError::Underflow`]).
 //!
 //! Tested: second-order responses with an overshoot of 2 % or more, inverse responses that go
 //! the wrong way by 2 % or more, and integrating processes, with noise up to 0.2 % of the
@@ -425,8 +427,12 @@ pub enum IdentifyError<F = f64> {
     NotFopdt,
     /// A quantity (named) overflows the float type: a change (final value − baseline) beyond
     /// its largest value, or a step so small that change / step does not fit, or T + L or T
-    /// (a huge sample period), or a mean (samples spanning more than the largest value).
+    /// (a huge sample period), or the last tenths' movement over the change.
     Overflow(&'static str),
+    /// A quantity (named) underflows the float type: a gain change / step that rounds to 0 (a
+    /// step huge against the change), or a T that rounds to 0 (a fraction of a sample at a
+    /// sample period near the smallest normal value).
+    Underflow(&'static str),
 }
 
 impl<F: Real> fmt::Display for IdentifyError<F> {
@@ -468,6 +474,10 @@ impl<F: Real> fmt::Display for IdentifyError<F> {
                 f.write_str("the response does not fit a first-order-plus-dead-time model")
             }
             Self::Overflow(what) => write!(f, "{what} overflows the float type"),
+            Self::Underflow(what) => write!(
+                f,
+                "{what} underflows the float type (it would lose its precision)"
+            ),
         }
     }
 }
@@ -539,10 +549,11 @@ fn count<F: Real>(n: usize) -> F {
 /// of the deviations from the first sample, so it overflows only when the count times the
 /// part's spread does, not the count times its level (an attack found a log of 1.4 million
 /// `f32` samples at 10³³ refused); and a power-of-two scaling of the samples scales the mean
-/// exactly. Should the deviations' sum still overflow (a long noisy part near the type's
-/// largest value), each deviation is scaled down by a power of two at least the count before
-/// it is summed: the mean then overflows only when a deviation does (a part spanning more than
-/// the type's largest value), and is the one the plain sum would give.
+/// exactly. Should that sum overflow (a long noisy part near the type's largest value, or a
+/// deviation beyond it), the half of each deviation, scaled down by a power of two at least the
+/// count, is summed instead, and the mean formed as twice the mean of the halves: every step
+/// exact, so the same mean as the plain sum wherever it fits, and never an overflow (a mean of
+/// values of the type is one).
 fn mean_and_spread<F: Real>(part: &[F]) -> (F, F) {
     let reference = part.first().copied().unwrap_or_else(F::zero);
     let n = count::<F>(part.len().max(1));
@@ -550,11 +561,10 @@ fn mean_and_spread<F: Real>(part: &[F]) -> (F, F) {
     for &v in part {
         s.add(v - reference);
     }
-    let mut shift = s.value() / n;
-    if !shift.is_finite() {
-        // Each deviation times 2⁻ᵐ (2ᵐ ≥ the count), exactly, and the sum over n·2⁻ᵐ, also
-        // exact: the same quotient, so the same mean as where the plain sum fits (a log scaled
-        // by a power of two keeps its model across the switch).
+    let shift = s.value() / n;
+    let mean = if shift.is_finite() {
+        reference + shift
+    } else {
         let half = c::<F>(0.5);
         let (mut down, mut span) = (F::one(), n);
         while span > F::one() {
@@ -563,11 +573,10 @@ fn mean_and_spread<F: Real>(part: &[F]) -> (F, F) {
         }
         let mut s = Sum::new();
         for &v in part {
-            s.add((v - reference) * down);
+            s.add((v * half - reference * half) * down);
         }
-        shift = s.value() / (n * down);
-    }
-    let mean = reference + shift;
+        (reference * half + s.value() / (n * down)) * F::from_u16(2)
+    };
     let mut spread = F::zero();
     for &v in part {
         let d = (v - mean).abs();
@@ -696,8 +705,14 @@ pub fn identify_step_at<F: Real>(
     if peak.is_nan() || two * peak >= F::one() {
         return Err(IdentifyError::NoResponse);
     }
-    if !(change / step).is_finite() {
+    let gain = change / step;
+    if !gain.is_finite() {
         return Err(IdentifyError::Overflow("the gain (change / step)"));
+    }
+    // A gain of 0 has lost everything (a step of 2⁶⁰ on a change of 2⁻¹⁰⁰ in `f32`); a
+    // subnormal one is off by up to half the smallest subnormal value (stated).
+    if gain == F::zero() {
+        return Err(IdentifyError::Underflow("the gain (change / step)"));
     }
     // Settled: the last tenth's mean and the tenth before's agree to 0.2 % of the change, plus
     // four standard deviations of the difference of two means of noise of this peak.
@@ -705,10 +720,19 @@ pub fn identify_step_at<F: Real>(
         .get(split.saturating_sub(tail_len)..split)
         .unwrap_or(&[]);
     let (y_previous, _) = mean_and_spread(previous);
-    let moving = ((y_final - y_previous) / change).abs();
-    // A sum that overflowed makes `moving` NaN, which no comparison below would refuse.
+    let moved = y_final - y_previous;
+    let moving = if moved.is_finite() {
+        (moved / change).abs()
+    } else {
+        // Two means more than the largest value apart: halved, exactly.
+        let half = c::<F>(0.5);
+        ((y_final * half - y_previous * half) / (change * half)).abs()
+    };
+    // A movement that is not finite would pass every comparison below.
     if !moving.is_finite() {
-        return Err(IdentifyError::Overflow("the change (the samples' mean)"));
+        return Err(IdentifyError::Overflow(
+            "the movement (the last tenths' means over the change)",
+        ));
     }
     let allowed =
         c::<F>(0.002) + c::<F>(4.0) * relative_noise / sqrt(count::<F>(tail_len)) + rounding;
@@ -802,6 +826,13 @@ pub fn identify_step_at<F: Real>(
             "T (the sample period times the log)",
         ));
     }
+    // A fraction of a sample at a sample period near the smallest normal value can round to 0
+    // (a subnormal T is within the tolerance, which counts h; 0 is not positive).
+    if time_constant <= F::zero() {
+        return Err(IdentifyError::Underflow(
+            "T (the sample period times the log)",
+        ));
+    }
     let dead_time = t_ar - time_constant;
     let dead_time = if dead_time > F::zero() {
         dead_time
@@ -809,7 +840,7 @@ pub fn identify_step_at<F: Real>(
         F::zero()
     };
     Ok(Fopdt {
-        gain: change / step,
+        gain,
         time_constant,
         dead_time,
     })
