@@ -2180,3 +2180,63 @@ fn dropouts_near_the_largest_value_fit_and_underflows_are_named() {
         ))
     );
 }
+
+/// The documented rule for a negative dead time: refused (`NotFopdt`) when the fitted L is
+/// below minus the stated tolerance, h + 2 % (T + L) + ν·(T + L + 10·D/√N) (the rounding's
+/// term is 10⁻¹⁶ of it here), fitted otherwise. Two lags, 1 − a·e^(−t/T1) − (1 − a)·e^(−t/T2),
+/// whose method-of-areas T and L are known in closed form (A0 = a·T1 + (1 − a)·T2,
+/// A1 = A0 − a·T1·(1 − e^(−A0/T1)) − (1 − a)·T2·(1 − e^(−A0/T2)), T = e·A1, L = A0 − T), swept
+/// across the boundary, with noise only before the step (±p alternating: ν is exactly p over
+/// the change): wherever L is more than 0.1 % of T + L from minus the tolerance (the sampling's
+/// own error is far below that), the verdict is the rule's, on both sides.
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "hundreds of fits of up to 30 000 samples: hours under Miri; runs natively in every CI run"
+)]
+fn a_negative_dead_time_is_refused_exactly_beyond_the_stated_tolerance() {
+    use regler_pid::tuning::{IdentifyError, identify_step_at};
+    let (pre, h, base, change) = (40usize, 0.05f64, 3.0f64, 2.0f64);
+    let (mut refused, mut fitted) = (0, 0);
+    for (t1, t2, p) in [
+        (1.0, 50.0, 0.02),
+        (2.0, 30.0, 0.0),
+        (5.0, 100.0, 0.01),
+        (0.5, 20.0, 0.04),
+    ] {
+        let d = 15.0 * t2;
+        let n = (d / h) as usize;
+        let nu = p / change;
+        for step in 0..=120 {
+            let a = f64::from(step) * 0.0025;
+            let a0 = a * t1 + (1.0 - a) * t2;
+            let a1 =
+                a0 - a * t1 * (1.0 - (-a0 / t1).exp()) - (1.0 - a) * t2 * (1.0 - (-a0 / t2).exp());
+            let l = a0 - core::f64::consts::E * a1;
+            let d_log = n as f64 * h;
+            let tolerance = h + 0.02 * a0 + nu * (a0 + 10.0 * d_log / (n as f64).sqrt());
+            let mut y: Vec<f64> = (0..pre)
+                .map(|k| base + if k % 2 == 0 { p } else { -p })
+                .collect();
+            y.extend((0..n).map(|k| {
+                let t = k as f64 * h;
+                base + change * (1.0 - a * (-t / t1).exp() - (1.0 - a) * (-t / t2).exp())
+            }));
+            let got = identify_step_at(&y, pre, h, 1.0);
+            let what = format!(
+                "T1 {t1}, T2 {t2}, a {a}, ν {nu}: L {l:.4}, tolerance {tolerance:.4}: {got:?}"
+            );
+            if l < -tolerance - 0.001 * a0 {
+                assert_eq!(got, Err(IdentifyError::NotFopdt), "{what}");
+                refused += 1;
+            } else if l > -tolerance + 0.001 * a0 {
+                assert!(got.is_ok(), "{what}");
+                fitted += 1;
+            }
+        }
+    }
+    assert!(
+        refused > 40 && fitted > 40,
+        "refused {refused}, fitted {fitted}"
+    );
+}
