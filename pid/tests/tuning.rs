@@ -2240,3 +2240,40 @@ fn a_negative_dead_time_is_refused_exactly_beyond_the_stated_tolerance() {
         "refused {refused}, fitted {fitted}"
     );
 }
+
+/// The last two tenths further apart than the type's largest value (the tenth before the last
+/// at −0.9 × MAX, the last at +0.9 × MAX, from a baseline of 0): their difference overflows,
+/// and is halved instead — exactly: the movement is 2 changes, `NotSettled(2)`, never an
+/// overflow or a NaN that would pass the check.
+#[test]
+fn two_tenths_further_apart_than_the_largest_value_are_not_settled() {
+    use regler_pid::tuning::{IdentifyError, identify_step_at};
+    let big = 0.9 * f64::MAX;
+    let mut y = vec![0.0f64; 21];
+    y.extend((1..100).map(|i| match i {
+        80..90 => -big,
+        90.. => big,
+        _ => 0.0,
+    }));
+    assert_eq!(
+        identify_step_at(&y, 20, 1.0, 1.0),
+        Err(IdentifyError::NotSettled(2.0))
+    );
+    let big = 0.9 * f32::MAX;
+    let y: Vec<f32> = y
+        .iter()
+        .map(|&v| {
+            if v > 0.0 {
+                big
+            } else if v < 0.0 {
+                -big
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    assert_eq!(
+        identify_step_at(&y, 20, 1.0f32, 1.0f32),
+        Err(IdentifyError::NotSettled(2.0f32))
+    );
+}
