@@ -2277,3 +2277,21 @@ fn two_tenths_further_apart_than_the_largest_value_are_not_settled() {
         Err(IdentifyError::NotSettled(2.0f32))
     );
 }
+
+/// A fitted T that is not positive is `NotFopdt`, the documented rule, whatever the sample
+/// period — not a T that "underflows": a response that stays 0.5 % below its baseline (within
+/// the undershoot's allowance) for 200 samples and then jumps to its final value has
+/// A1 = ∫₀^(T+L) r dt < 0.
+#[test]
+fn a_fitted_t_that_is_not_positive_is_not_fopdt() {
+    use regler_pid::tuning::{IdentifyError, identify_step_at};
+    let mut y = vec![10.0f64; 41];
+    y.extend((1..2000).map(|i| if i < 200 { 10.0 - 0.005 } else { 11.0 }));
+    for h in [1.0, 1e-300, 1e300] {
+        assert_eq!(
+            identify_step_at(&y, 40, h, 1.0),
+            Err(IdentifyError::NotFopdt),
+            "h = {h}"
+        );
+    }
+}
