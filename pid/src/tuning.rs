@@ -37,7 +37,9 @@
 //! fraction of the change, D the log's length from the step and N its number of samples from
 //! the step (the final value is a mean over the last tenth, and its error counts over the
 //! whole log). Without samples before the step the baseline is one sample and its noise
-//! enters the model unaveraged (tested noise-free only).
+//! enters the model unaveraged (tested noise-free only). The noise term is for white noise
+//! (independent from sample to sample, as tested), which the means average: a bias of ν
+//! confined to the last tenth is not averaged out, and moves T + L by up to about ν·D.
 //!
 //! The samples' own rounding adds to that tolerance. With ρ = ε times the largest sample's
 //! magnitude (at least the type's smallest normal value), over the fitted change |K·step| —
