@@ -52,6 +52,7 @@
 use core::fmt;
 
 use crate::Real;
+use crate::real::two_sum;
 
 /// How the actuator is driven.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -292,16 +293,15 @@ impl<F: Real> ThreePoint<F> {
         (target - self.position) - self.carry
     }
 
-    /// Adds `step` to the compensated estimate (Knuth's two-sum, then renormalised), clamped
-    /// into 0..=1 (the motor stops at its ends).
+    /// Adds `step` to the compensated estimate (the rounding error of `position + step` taken
+    /// exactly, added to the carry, and the pair renormalised — exactly too, whatever the
+    /// magnitudes: a carry larger than a sum that cancelled to near 0 included), clamped into
+    /// 0..=1 (the motor stops at its ends).
     fn advance(&mut self, step: F) {
-        let sum = self.position + step;
-        let virtual_step = sum - self.position;
-        let lost = (self.position - (sum - virtual_step)) + (step - virtual_step);
-        let carry = self.carry + lost;
-        let hi = sum + carry;
-        self.carry = carry - (hi - sum);
-        self.position = hi;
+        let (sum, lost) = two_sum(self.position, step);
+        let (position, carry) = two_sum(sum, self.carry + lost);
+        self.position = position;
+        self.carry = carry;
         // On the unrounded pair: `position()` rounds 1 − 10⁻⁹ to 1 in f32.
         if self.error_to(F::one()) <= F::zero() {
             self.set(F::one());

@@ -85,6 +85,20 @@ impl Real for f64 {
     }
 }
 
+/// `a + b` rounded, and its rounding error exactly (Knuth's two-sum: no condition on the
+/// magnitudes; exact unless the sum overflows). The compensated sums of the step
+/// identification and of the actuator's position estimate both rest on it.
+#[allow(
+    clippy::arithmetic_side_effects,
+    reason = "float arithmetic on Real (f32 or f64): it cannot panic or wrap"
+)]
+pub(crate) fn two_sum<F: Real>(a: F, b: F) -> (F, F) {
+    let sum = a + b;
+    let b_part = sum - a;
+    let a_part = sum - b_part;
+    (sum, (a - a_part) + (b - b_part))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -97,5 +111,21 @@ mod tests {
         assert!(f64::NAN.to_f32_nearest().is_nan());
         assert_eq!(0.1f64.to_f32_nearest(), 0.1f32);
         assert_eq!(<f32 as Real>::from_f64_nearest(-1e40), f32::MIN);
+    }
+
+    #[test]
+    fn two_sum_is_exact_whichever_operand_is_larger() {
+        // A small operand with bits below the larger one's ulp: the error is all of it, in
+        // either order (the fast form, which assumes |a| ≥ |b|, loses it when a is the small one).
+        let small = f64::from_bits(0x3C30_0000_0000_0001); // 2⁻⁶⁰·(1 + 2⁻⁵²)
+        assert_eq!(two_sum(small, 1.0), (1.0, small));
+        assert_eq!(two_sum(1.0, small), (1.0, small));
+        let small = f32::from_bits(0x2D80_0001); // 2⁻³⁶·(1 + 2⁻²³)
+        assert_eq!(two_sum(small, -1.0f32), (-1.0, small));
+        // A half-way sum rounds to even; the error is what was rounded off, exactly.
+        let (sum, error) = two_sum(1.0f64, f64::EPSILON / 2.0);
+        assert_eq!((sum, error), (1.0, f64::EPSILON / 2.0));
+        let (sum, error) = two_sum(1.0 + f64::EPSILON, f64::EPSILON / 2.0);
+        assert_eq!((sum, error), (1.0 + 2.0 * f64::EPSILON, -f64::EPSILON / 2.0));
     }
 }

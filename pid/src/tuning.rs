@@ -132,6 +132,7 @@
 
 use core::fmt;
 
+use crate::real::two_sum;
 use crate::{Action, Config, ConfigError, Kind, Pid, Real, Scalar};
 
 /// The ultimate point of a process: where its phase reaches −180°.
@@ -497,6 +498,21 @@ fn percent<F: Real>(fraction: F) -> F {
     fraction * F::from_u16(100)
 }
 
+/// (a − b)/d, rounded once, also where a − b overflows (two means of the last tenths, or a
+/// sample beyond the final value of a change near the type's largest value). a and b are then
+/// at least half an ulp of the largest value apart from 0 and of opposite signs, and d — the
+/// change, a non-zero difference with one of them — is a multiple of an ulp of values that
+/// large: all three are normal, so halving them is exact and gives the same quotient.
+fn difference_over<F: Real>(a: F, b: F, d: F) -> F {
+    let difference = a - b;
+    if difference.is_finite() {
+        difference / d
+    } else {
+        let half = c::<F>(0.5);
+        (a * half - b * half) / (d * half)
+    }
+}
+
 /// Compensated summation: the sum as an unevaluated pair `sum + carry`, the carry below half an
 /// ulp of the sum. Each term's rounding error is computed exactly (Knuth's two-sum) and added
 /// to the carry, and the carry is folded back into the sum at once, so it never grows. Each
@@ -531,15 +547,6 @@ impl<F: Real> Sum<F> {
     fn value(self) -> F {
         self.sum + self.carry
     }
-}
-
-/// `a + b` rounded, and its rounding error exactly (Knuth's two-sum: no condition on the
-/// magnitudes; exact unless the sum overflows).
-fn two_sum<F: Real>(a: F, b: F) -> (F, F) {
-    let sum = a + b;
-    let b_part = sum - a;
-    let a_part = sum - b_part;
-    (sum, (a - a_part) + (b - b_part))
 }
 
 /// A count as F (nearest: exact below 2²⁴ in `f32`, relative error below 10⁻⁷ above).
@@ -654,14 +661,15 @@ pub fn identify_step_at<F: Real>(
     if !(step.is_finite() && step != F::zero()) {
         return Err(IdentifyError::Input("the step"));
     }
-    if let Some(k) = samples.iter().position(|v| !v.is_finite()) {
-        return Err(IdentifyError::NotFinite(k));
+    // Every sample finite, and the largest magnitude, for the samples' rounding below (at
+    // least the smallest normal value: the ulp of subnormals is fixed).
+    let mut largest = F::min_positive_value();
+    for (k, v) in samples.iter().enumerate() {
+        if !v.is_finite() {
+            return Err(IdentifyError::NotFinite(k));
+        }
+        largest = if v.abs() > largest { v.abs() } else { largest };
     }
-    // The largest magnitude, for the samples' rounding below (at least the smallest normal
-    // value: the ulp of subnormals is fixed).
-    let largest = samples.iter().fold(F::min_positive_value(), |m, v| {
-        if v.abs() > m { v.abs() } else { m }
-    });
     let before = samples.get(..=step_at).unwrap_or(&[]);
     let (y0, pre_noise) = mean_and_spread(before);
     let tail_len = (n / 10).max(2);
@@ -722,14 +730,7 @@ pub fn identify_step_at<F: Real>(
         .get(split.saturating_sub(tail_len)..split)
         .unwrap_or(&[]);
     let (y_previous, _) = mean_and_spread(previous);
-    let moved = y_final - y_previous;
-    let moving = if moved.is_finite() {
-        (moved / change).abs()
-    } else {
-        // Two means more than the largest value apart: halved, exactly.
-        let half = c::<F>(0.5);
-        ((y_final * half - y_previous * half) / (change * half)).abs()
-    };
+    let moving = difference_over(y_final, y_previous, change).abs();
     // A movement that is not finite would pass every comparison below.
     if !moving.is_finite() {
         return Err(IdentifyError::Overflow(
@@ -746,16 +747,7 @@ pub fn identify_step_at<F: Real>(
     // for an FOPDT process; beyond 1 % of the change plus twice the noise (and twice the
     // rounding: r is off by up to 2ρ) it is another shape.
     let half = c::<F>(0.5);
-    // v − y0 overflows only for a sample beyond the final value of a change near the type's
-    // largest value, both then normal and large: halving them is exact, and so is the result.
-    let unit = |v: F| {
-        let d = v - y0;
-        if d.is_finite() {
-            d / change
-        } else {
-            (v * half - y0 * half) / (change * half)
-        }
-    };
+    let unit = |v: F| difference_over(v, y0, change);
     let margin = c::<F>(0.01) + two * (relative_noise + rounding);
     let (mut lo, mut hi) = (F::infinity(), F::neg_infinity());
     for &v in response {
