@@ -126,6 +126,9 @@ mod tests {
         let (sum, error) = two_sum(1.0f64, f64::EPSILON / 2.0);
         assert_eq!((sum, error), (1.0, f64::EPSILON / 2.0));
         let (sum, error) = two_sum(1.0 + f64::EPSILON, f64::EPSILON / 2.0);
-        assert_eq!((sum, error), (1.0 + 2.0 * f64::EPSILON, -f64::EPSILON / 2.0));
+        assert_eq!(
+            (sum, error),
+            (1.0 + 2.0 * f64::EPSILON, -f64::EPSILON / 2.0)
+        );
     }
 }
