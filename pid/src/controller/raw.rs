@@ -424,6 +424,14 @@ mod tests {
             )
     }
 
+    /// [`configs`] with set-point weights b and c from 2 to 40 and a gain from 10⁻³ to 0.3: the
+    /// corners where |b·r − y| or |c·r − y| is the largest value a sample forms.
+    fn heavy_weights() -> impl Strategy<Value = Config> {
+        let log = |lo: f64, hi: f64| (lo.ln()..hi.ln()).prop_map(f64::exp);
+        (configs(), log(2.0, 40.0), log(2.0, 40.0), log(1e-3, 0.3))
+            .prop_map(|(config, b, c, k)| Config { b, c, k, ..config })
+    }
+
     /// One step of a run: a sample (set-point and measurement as raw bits shifted right by a
     /// random count, so every magnitude up to the type's ends comes up), with feed-forward and
     /// tracking now and then, or an operator's action.
@@ -953,6 +961,23 @@ mod tests {
         /// configurations of every kind and scale; some corners take the raw path.
         #[test]
         fn every_corner_of_the_gate_is_the_checked_update(config in configs()) {
+            for result in [
+                gate_corners_are_the_checked_update::<I16F16>(&config),
+                gate_corners_are_the_checked_update::<I8F24>(&config),
+                gate_corners_are_the_checked_update::<I32F32>(&config),
+                gate_corners_are_the_checked_update::<I48F16>(&config),
+            ] {
+                prop_assert!(result.is_ok(), "{}", result.err().unwrap_or_default());
+            }
+        }
+
+        /// The same with set-point weights far above 1 and a small gain: the bounds of b·r − y
+        /// (P's input) and of c·r − y (D's) then exceed the output's, so they decide the gate,
+        /// and the corners put those values at their bounds.
+        #[test]
+        fn every_corner_of_the_gate_is_the_checked_update_under_heavy_set_point_weights(
+            config in heavy_weights(),
+        ) {
             for result in [
                 gate_corners_are_the_checked_update::<I16F16>(&config),
                 gate_corners_are_the_checked_update::<I8F24>(&config),
