@@ -627,7 +627,10 @@ pub fn identify_step<F: Real>(samples: &[F], h: F, step: F) -> Result<Fopdt<F>, 
 /// areas (Åström & Hägglund): with r(t) the response normalised to go from 0 to 1,
 /// A0 = ∫(1 − r) dt = T + L and A1 = ∫₀^(T+L) r dt = T/e, so T = e·A1 and L = A0 − T; K is the
 /// change over the step. Areas average over many samples, so the method tolerates noise far
-/// better than reading two crossing times off the curve.
+/// better than reading two crossing times off the curve. The integrals are those of the samples
+/// joined by straight lines: the trapezoidal rule over the whole log for A0, and for A1 the
+/// same up to the last whole interval before T + L, then the partial one interpolated — exact
+/// for a response linear between samples.
 ///
 /// `samples[..step_at]` were logged before the step, `samples[step_at]` at the instant of the
 /// step (before the process could answer), one sample every `h` seconds; `step` is the change of
