@@ -575,9 +575,10 @@ fn mean_and_spread<F: Real>(part: &[F]) -> (F, F) {
         reference + shift
     } else {
         let half = c::<F>(0.5);
-        let (mut down, mut span) = (F::one(), n);
-        while span > F::one() {
-            span = span * half;
+        // 2^−⌈log₂ len⌉: one halving per bit of len − 1 (at most 64).
+        let halvings = usize::BITS.saturating_sub(part.len().saturating_sub(1).leading_zeros());
+        let mut down = F::one();
+        for _ in 0..halvings {
             down = down * half;
         }
         let mut s = Sum::new();

@@ -320,18 +320,14 @@ pub(crate) fn gate<T: Scalar, R: Raw>(pid: &Pid<T>, lsb: f64, max: f64) -> u8 {
             .max(centre + i)
             <= limit
     };
-    let mut k = bits.saturating_sub(2);
-    loop {
+    for k in (0..=bits.saturating_sub(2)).rev() {
         // 2^k, its exponent field set directly (k < 64).
         let g = lsb * f64::from_bits(u64::from(1023 + k) << 52);
         if fits(g) {
             return k as u8;
         }
-        if k == 0 {
-            return bits.saturating_sub(1) as u8;
-        }
-        k -= 1;
     }
+    bits.saturating_sub(1) as u8
 }
 
 #[cfg(test)]
@@ -430,6 +426,24 @@ mod tests {
         let log = |lo: f64, hi: f64| (lo.ln()..hi.ln()).prop_map(f64::exp);
         (configs(), log(2.0, 40.0), log(2.0, 40.0), log(1e-3, 0.3))
             .prop_map(|(config, b, c, k)| Config { b, c, k, ..config })
+    }
+
+    /// [`configs`] with an output range far from 0 (its centre 1 to 100 times its width away,
+    /// either side) and set-point weights b from −10 to 10: the corners where the integral's
+    /// centre, offset·r + the range's midpoint, is the largest value a sample forms.
+    fn offset_outputs() -> impl Strategy<Value = Config> {
+        (configs(), 1.0..100.0f64, any::<bool>(), -10.0..10.0f64).prop_map(
+            |(config, away, below, b)| {
+                let width = config.ymax - config.ymin;
+                let centre = if below { -away } else { away } * width.max(1e-3);
+                Config {
+                    ymin: centre - width / 2.0,
+                    ymax: centre + width / 2.0,
+                    b,
+                    ..config
+                }
+            },
+        )
     }
 
     /// One step of a run: a sample (set-point and measurement as raw bits shifted right by a
@@ -974,6 +988,20 @@ mod tests {
         /// The same with set-point weights far above 1 and a small gain: the bounds of b·r − y
         /// (P's input) and of c·r − y (D's) then exceed the output's, so they decide the gate,
         /// and the corners put those values at their bounds.
+        #[test]
+        fn every_corner_of_the_gate_is_the_checked_update_for_outputs_far_from_0(
+            config in offset_outputs(),
+        ) {
+            for result in [
+                gate_corners_are_the_checked_update::<I16F16>(&config),
+                gate_corners_are_the_checked_update::<I8F24>(&config),
+                gate_corners_are_the_checked_update::<I32F32>(&config),
+                gate_corners_are_the_checked_update::<I48F16>(&config),
+            ] {
+                prop_assert!(result.is_ok(), "{}", result.err().unwrap_or_default());
+            }
+        }
+
         #[test]
         fn every_corner_of_the_gate_is_the_checked_update_under_heavy_set_point_weights(
             config in heavy_weights(),
