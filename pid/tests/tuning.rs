@@ -2253,7 +2253,7 @@ fn a_negative_dead_time_is_refused_exactly_beyond_the_stated_tolerance() {
 #[test]
 #[cfg_attr(
     miri,
-    ignore = "hundreds of fits of up to 10 000 samples: hours under Miri; runs natively in every CI run"
+    ignore = "hundreds of fits of up to 8 000 samples: hours under Miri; runs natively in every CI run"
 )]
 fn a_negative_dead_time_within_the_rounding_term_is_fitted_in_f32() {
     use regler_pid::tuning::{IdentifyError, identify_step_at};
