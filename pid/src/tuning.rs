@@ -71,9 +71,10 @@
 //! T + L plus h. A noisy log shorter than 8 T can pass with K off by more: log at least 8 T.
 //!
 //! The response is refused, never fitted, when — with "noise" the largest deviation from the
-//! mean of the samples before the step when there are 20 or more of them (a process still
-//! oscillating at the end of the log is not its own noise), otherwise the larger of that and
-//! half the largest change between neighbouring samples of the last tenth:
+//! baseline of the samples it is the mean of (those before the step and the one at its instant)
+//! when 20 or more samples precede the step (a process still oscillating at the end of the log
+//! is not its own noise), otherwise the larger of that and half the largest change between
+//! neighbouring samples of the last tenth:
 //! - it has not settled: the mean of the last tenth differs from the mean of the tenth before
 //!   by more than 0.2 % of the change plus 4·noise/√(samples in a tenth) plus ρ of it
 //!   ([`IdentifyError::NotSettled`]; an integrating process's ramp ends here);
@@ -561,14 +562,20 @@ fn count<F: Real>(n: usize) -> F {
 /// exactly. Should that sum overflow (a long noisy part near the type's largest value, or a
 /// deviation beyond it), the half of each deviation, scaled down by a power of two at least the
 /// count, is summed instead, and the mean formed as twice the mean of the halves: every step
-/// exact, so the same mean as the plain sum wherever it fits, and never an overflow (a mean of
-/// values of the type is one).
+/// exact, so the same mean as the plain sum wherever it fits. The mean is then held between the
+/// part's least and greatest values, where a mean lies: the rounding of many deviations (more
+/// than 2²⁴ in `f32`, all rounded the same way when the first sample is far from the rest) had
+/// carried it past them and past the largest value of the type (the sixth attack). So it never
+/// overflows.
 fn mean_and_spread<F: Real>(part: &[F]) -> (F, F) {
     let reference = part.first().copied().unwrap_or_else(F::zero);
     let n = count::<F>(part.len().max(1));
     let mut s = Sum::new();
+    let (mut least, mut greatest) = (reference, reference);
     for &v in part {
         s.add(v - reference);
+        least = if v < least { v } else { least };
+        greatest = if v > greatest { v } else { greatest };
     }
     let shift = s.value() / n;
     let mean = if shift.is_finite() {
@@ -586,6 +593,17 @@ fn mean_and_spread<F: Real>(part: &[F]) -> (F, F) {
             s.add((v * half - reference * half) * down);
         }
         (reference * half + s.value() / (n * down)) * F::from_u16(2)
+    };
+    // The rounding of n deviations and of the count (past 2²⁴ in `f32`) can carry the mean
+    // outside the part's values, and past the largest value of the type: it is held within
+    // them. Their least and greatest scale exactly, so the hold keeps a power-of-two scaling
+    // exact.
+    let mean = if mean > greatest {
+        greatest
+    } else if mean < least {
+        least
+    } else {
+        mean
     };
     let mut spread = F::zero();
     for &v in part {
@@ -1486,6 +1504,45 @@ mod tests {
                 matches!(Relay::new(bad), Err(RelayError::Config(_))),
                 "{bad:?}"
             );
+        }
+    }
+
+    /// A mean lies between its part's least and greatest values, and never overflows: `f32`
+    /// parts of more than 2²⁴ samples whose first sample is far below the rest (the sixth attack:
+    /// 2²⁴ + 1 samples at or just under `f32::MAX` after one at −0.0006·MAX; each halved
+    /// deviation rounds by up to half an ulp the same way, the count rounds down, and the mean
+    /// came out past `MAX`, infinite). Also: the mean of the part scaled by ½ is exactly half
+    /// its mean.
+    #[test]
+    #[cfg_attr(
+        miri,
+        ignore = "parts of 2²⁴ + 1 and 2²⁴ + 2 f32 samples, each mean taken three times: days under Miri; safe code, run natively in every CI run"
+    )]
+    fn a_mean_stays_between_the_least_and_greatest_samples() {
+        let (far, farther) = (-0.0006 * f32::MAX, f32::from_bits(0x7f00_0000));
+        for (len, first, ulps_under) in [
+            ((1usize << 24) + 1, far, 0u32),
+            ((1usize << 24) + 1, far, 3),
+            ((1usize << 24) + 2, farther, 1),
+            ((1usize << 24) + 1, 0.0, 0),
+        ] {
+            let top = f32::from_bits(f32::MAX.to_bits() - ulps_under);
+            let mut part = vec![top; len];
+            part[0] = first;
+            // Every third sample one ulp further under (the attack's "30 % 1–3 ulps below").
+            for v in part.iter_mut().skip(1).step_by(3) {
+                *v = f32::from_bits(v.to_bits() - 1);
+            }
+            let (mean, _) = mean_and_spread(&part);
+            let what = format!("{len} samples, first {first:e}, {ulps_under} ulps under");
+            assert!(
+                mean.is_finite() && mean >= first && mean <= top,
+                "{what}: {mean:e}"
+            );
+            let halved: Vec<f32> = part.iter().map(|v| v * 0.5).collect();
+            assert_eq!(mean_and_spread(&halved).0 * 2.0, mean, "{what}, halved");
+            let negated: Vec<f32> = part.iter().map(|v| -v).collect();
+            assert_eq!(mean_and_spread(&negated).0, -mean, "{what}, negated");
         }
     }
 

@@ -2380,6 +2380,33 @@ fn the_areas_are_the_integrals_of_the_samples_joined_by_straight_lines() {
     }
 }
 
+/// The sixth attack's log: 2²⁴ + 1 `f32` samples before the step, the first at −0.0006 × MAX
+/// and the rest at MAX. Their mean fits (it lies between them), and so does the noise's
+/// measure only as "more than the change": the verdict is `NoResponse` by the stated rules —
+/// it was `Overflow("the change (the samples' mean)")`, the mean rounded past MAX. The same
+/// log at half the scale gets the same verdict.
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "a log of 2²⁴ + 101 f32 samples: days under Miri; runs natively in every CI run"
+)]
+fn a_long_f32_part_near_the_largest_value_has_a_mean_that_fits() {
+    use regler_pid::tuning::{IdentifyError, identify_step_at};
+    let pre = (1usize << 24) + 1;
+    let mut y = vec![f32::MAX; pre];
+    y[0] = -0.0006 * f32::MAX;
+    y.extend((0..100).map(|k| if k == 0 { f32::MAX } else { 0.5 * f32::MAX }));
+    assert_eq!(
+        identify_step_at(&y, pre - 1, 1.0f32, 1.0f32),
+        Err(IdentifyError::NoResponse)
+    );
+    let halved: Vec<f32> = y.iter().map(|v| v * 0.5).collect();
+    assert_eq!(
+        identify_step_at(&halved, pre - 1, 1.0f32, 1.0f32),
+        Err(IdentifyError::NoResponse)
+    );
+}
+
 /// The last two tenths further apart than the type's largest value (the tenth before the last
 /// at −0.9 × MAX, the last at +0.9 × MAX, from a baseline of 0): their difference overflows,
 /// and is halved instead — exactly: the movement is 2 changes, `NotSettled(2)`, never an
