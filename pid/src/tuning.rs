@@ -133,7 +133,7 @@
 
 use core::fmt;
 
-use crate::real::two_sum;
+use crate::real::Sum;
 use crate::{Action, Config, ConfigError, Kind, Pid, Real, Scalar};
 
 /// The ultimate point of a process: where its phase reaches −180°.
@@ -511,42 +511,6 @@ fn difference_over<F: Real>(a: F, b: F, d: F) -> F {
     } else {
         let half = c::<F>(0.5);
         (a * half - b * half) / (d * half)
-    }
-}
-
-/// Compensated summation: the sum as an unevaluated pair `sum + carry`, the carry below half an
-/// ulp of the sum. Each term's rounding error is computed exactly (Knuth's two-sum) and added
-/// to the carry, and the carry is folded back into the sum at once, so it never grows. Each
-/// term then loses at most about u² times the partial sum (u the unit roundoff), in the
-/// rounding of `carry + error`: without cancellation the result is within an ulp of the sum
-/// (10⁶ tenths in `f32`), but where the terms cancel the error is bounded by N·u²·max|partial
-/// sum|, not by the final sum (an attack found 4 terms 16 384 ulps off an exact 8.3·10⁻⁵).
-/// Neumaier's form, which lets the carry collect every error and adds it at the end, sums the
-/// carry plainly: 10⁶ tenths in `f32` came to 99 994.2 instead of 100 000.0 (a plain sum is 1 %
-/// off).
-#[derive(Clone, Copy)]
-struct Sum<F> {
-    sum: F,
-    carry: F,
-}
-
-impl<F: Real> Sum<F> {
-    fn new() -> Self {
-        Self {
-            sum: F::zero(),
-            carry: F::zero(),
-        }
-    }
-
-    fn add(&mut self, v: F) {
-        let (t, error) = two_sum(self.sum, v);
-        let (sum, carry) = two_sum(t, self.carry + error);
-        self.sum = sum;
-        self.carry = carry;
-    }
-
-    fn value(self) -> F {
-        self.sum + self.carry
     }
 }
 

@@ -262,3 +262,79 @@ fn targets_at_beyond_and_near_the_ends() {
     check!(f64);
     check!(f32);
 }
+
+/// Requests below half an ulp of what is already pending add up, exactly as asked (the seventh
+/// attack: the pending change was a plain sum, so 4·10⁻¹⁰ on 0.0099 in `f32`, and 8·10⁻¹⁹ on
+/// 0.0099 in `f64`, rounded away every time and the dead band was never reached).
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "300 000 and 2 million requests: an hour under Miri; runs natively in every CI run"
+)]
+fn requests_below_the_pendings_resolution_add_up() {
+    let config = ActuatorConfig {
+        run_time: 60.0f32,
+        min_pulse: 0.0,
+        dead_band: 0.01,
+        h: 1.0,
+    };
+    let mut v = ThreePoint::new(config, 0.5f32).unwrap();
+    assert_eq!(v.update_delta(0.0099).unwrap(), Drive::Stop);
+    // 1.2·10⁻⁴ more in all: past the dead band after 250 000 of them.
+    let first = (0..300_000).position(|_| v.update_delta(4e-10).unwrap() != Drive::Stop);
+    let first = first.expect("0.01002 of the stroke asked for, and nothing driven");
+    assert!(
+        (249_000..=251_000).contains(&first),
+        "driven at request {first}"
+    );
+
+    let config = ActuatorConfig {
+        run_time: 60.0f64,
+        min_pulse: 0.0,
+        dead_band: 0.01,
+        h: 1.0,
+    };
+    let mut v = ThreePoint::new(config, 0.5f64).unwrap();
+    assert_eq!(v.update_delta(0.0099).unwrap(), Drive::Stop);
+    for _ in 0..2_000_000 {
+        assert_eq!(v.update_delta(8e-19).unwrap(), Drive::Stop);
+    }
+    // 0.0099 + 1.6·10⁻¹² + 0.0001 − 10⁻¹²: 6·10⁻¹³ past the dead band.
+    assert_ne!(
+        v.update_delta(0.0001 - 1e-12).unwrap(),
+        Drive::Stop,
+        "0.01 + 6e-13 of the stroke asked for, and nothing driven"
+    );
+}
+
+/// A valve asked to shut, shuts — also from an estimate a subnormal distance from the end,
+/// whose error is too small to be a time (the seventh attack: `Stop` for ever at 10⁻⁴⁵ with no
+/// minimum pulse). Positional and velocity forms, both ends, `f32` and `f64`.
+#[test]
+fn a_valve_a_subnormal_distance_from_an_end_is_driven_into_it() {
+    fn check<F: regler_pid::Real>() {
+        let f = F::from_f64_nearest;
+        let config = ActuatorConfig {
+            run_time: f(0.1),
+            min_pulse: F::zero(),
+            dead_band: F::zero(),
+            h: f(0.01),
+        };
+        let tiny = F::min_positive_value() * F::epsilon(); // subnormal
+        for (start, end) in [
+            (tiny, F::zero()),
+            (F::one() - F::epsilon() / f(2.0), F::one()),
+        ] {
+            let mut v = ThreePoint::new(config, start).unwrap();
+            let drive = v.update(end).unwrap();
+            assert_ne!(drive, Drive::Stop, "positional, from {start:?}");
+            assert_eq!(v.position(), end);
+            let mut v = ThreePoint::new(config, start).unwrap();
+            let drive = v.update_delta(end - start).unwrap();
+            assert_ne!(drive, Drive::Stop, "velocity form, from {start:?}");
+            assert_eq!(v.position(), end);
+        }
+    }
+    check::<f32>();
+    check::<f64>();
+}

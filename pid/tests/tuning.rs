@@ -2407,6 +2407,49 @@ fn a_long_f32_part_near_the_largest_value_has_a_mean_that_fits() {
     );
 }
 
+/// "Not settled" is a movement of *more than* the allowance: a log whose last two tenths differ
+/// by exactly the allowance (0.2 % of the change + 4·noise/√(samples in a tenth) + ρ, here with
+/// no noise and ρ = ε: 0.002 + ε, an exact sum) is settled, and one whose tenth before the last
+/// is one ulp lower is not. The final value F and the tenth before P were searched for (in
+/// Python's `f64`, over random F in 1..2) so that (F − P)/F, the movement as a fraction of the
+/// change F from a baseline of 0, rounds to that sum exactly; the premise is checked here.
+#[test]
+fn a_movement_of_exactly_the_allowance_is_settled() {
+    use regler_pid::tuning::{IdentifyError, identify_step_at};
+    let allowance = 0.002 + f64::EPSILON;
+    assert_eq!(
+        allowance - 0.002,
+        f64::EPSILON,
+        "the allowance is an exact sum"
+    );
+    for (f, p) in [
+        (0x3ff7_d652_9651_32d7u64, 0x3ff7_ca1e_32b0_44a7u64),
+        (0x3ffd_ee0a_bfe9_8f8d, 0x3ffd_deb7_c8be_98fc),
+    ] {
+        let (f, p) = (f64::from_bits(f), f64::from_bits(p));
+        let lower = f64::from_bits(p.to_bits() - 1);
+        assert_eq!((f - p) / f, allowance, "the premise: a tie");
+        assert!((f - lower) / f > allowance, "the premise: past the tie");
+        let log = |p: f64| {
+            let mut y = vec![0.0f64; 20];
+            // A first-order rise to P, P over the tenth before the last, F over the last.
+            y.extend((0..800).map(|k| p * (1.0 - (-f64::from(k) / 50.0).exp())));
+            y.extend(core::iter::repeat_n(p, 100));
+            y.extend(core::iter::repeat_n(f, 100));
+            y
+        };
+        let at_tie = identify_step_at(&log(p), 20, 1.0, 1.0);
+        assert!(
+            !matches!(at_tie, Err(IdentifyError::NotSettled(_))),
+            "{at_tie:?}"
+        );
+        assert_eq!(
+            identify_step_at(&log(lower), 20, 1.0, 1.0),
+            Err(IdentifyError::NotSettled((f - lower) / f))
+        );
+    }
+}
+
 /// The last two tenths further apart than the type's largest value (the tenth before the last
 /// at −0.9 × MAX, the last at +0.9 × MAX, from a baseline of 0): their difference overflows,
 /// and is halved instead — exactly: the movement is 2 changes, `NotSettled(2)`, never an
