@@ -2450,6 +2450,48 @@ fn a_movement_of_exactly_the_allowance_is_settled() {
     }
 }
 
+/// "Undershoot" is a first move the wrong way by *more than* the margin: a dip of exactly 1 % of
+/// the change + twice the noise + 2ρ (here no noise and ρ = ε: 0.01 + 2ε, an exact sum) is not
+/// one, and a dip one ulp deeper is. The final value F and the dip v were searched for (in
+/// Python's `f64`, over random F in 1..2) so that −v/F, the dip as a fraction of the change F
+/// from a baseline of 0, rounds to that sum exactly; the premise is checked here.
+#[test]
+fn a_dip_of_exactly_the_margin_is_not_an_undershoot() {
+    use regler_pid::tuning::{IdentifyError, identify_step_at};
+    let margin = 0.01 + 2.0 * f64::EPSILON;
+    assert_eq!(
+        margin - 0.01,
+        2.0 * f64::EPSILON,
+        "the margin is an exact sum"
+    );
+    for (f, v) in [
+        (0x3ff2_1636_8b52_9b4bu64, 0xbf87_26ac_3773_fb1bu64),
+        (0x3ffe_a7b5_5eb5_61a5, 0xbf93_9e88_8e88_915f),
+    ] {
+        let (f, v) = (f64::from_bits(f), f64::from_bits(v));
+        let deeper = f64::from_bits(v.to_bits() + 1);
+        assert_eq!(-v / f, margin, "the premise: a tie");
+        assert!(-deeper / f > margin, "the premise: past the tie");
+        let log = |dip: f64| {
+            let mut y = vec![0.0f64; 21];
+            // A dip at the first sample after the step, then a first-order rise to F.
+            y.push(dip);
+            y.extend((2..800).map(|k| f * (1.0 - (-f64::from(k) / 50.0).exp())));
+            y.extend(core::iter::repeat_n(f, 200));
+            y
+        };
+        let at_tie = identify_step_at(&log(v), 20, 1.0, 1.0);
+        assert!(
+            !matches!(at_tie, Err(IdentifyError::Undershoot(_))),
+            "{at_tie:?}"
+        );
+        assert_eq!(
+            identify_step_at(&log(deeper), 20, 1.0, 1.0),
+            Err(IdentifyError::Undershoot(-deeper / f))
+        );
+    }
+}
+
 /// The last two tenths further apart than the type's largest value (the tenth before the last
 /// at −0.9 × MAX, the last at +0.9 × MAX, from a baseline of 0): their difference overflows,
 /// and is halved instead — exactly: the movement is 2 changes, `NotSettled(2)`, never an
