@@ -142,8 +142,12 @@ impl<F: Real> Sum<F> {
         self.carry = carry;
     }
 
+    /// The pair rounded to the type: `sum` itself, as every `add` leaves the pair normalised
+    /// (`sum` is `sum + carry` rounded, and the carry what that rounding left), so adding the
+    /// carry back would give `sum` again, ties included. Where a term overflowed, `sum` is
+    /// infinite (and the carry NaN).
     pub(crate) fn value(self) -> F {
-        self.sum + self.carry
+        self.sum
     }
 }
 
