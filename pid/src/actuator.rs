@@ -23,7 +23,8 @@
 //!   small to be a time; the stop ends it): a valve asked to shut, shuts.
 //! - Velocity form: requests smaller than `smallest_move()` wait and add up (kept as a change
 //!   in a compensated sum, so neither a change below the estimate's resolution nor one below
-//!   half an ulp of what is already pending is lost: 4·10⁻¹⁰ a request on 0.0099 in `f32`).
+//!   half an ulp of what is already pending is lost: 4·10⁻¹⁰ a request on 0.0099 in `f32`; a
+//!   pulse takes off the request exactly the travel it drives, so what waited under it stays).
 //!   When the requests add up to an end (within 64 ulps of it: the rounding of changes that
 //!   should reach it exactly, e.g. a
 //!   saturating controller's), the actuator is driven into that stop however little is left, as
@@ -41,8 +42,11 @@
 //!   estimate is never snapped onto an end; only targets within 64 ulps of an end count as the
 //!   end.
 //! - Refused by [`ThreePoint::new`]: a run time or h that is not finite and positive, a minimum
-//!   pulse outside 0..=h or longer than the run time, a dead band outside 0..1, and
-//!   `h / run_time` below the float type's smallest normal number (1.2·10⁻³⁸ in `f32`).
+//!   pulse outside 0..=h or longer than the run time, a dead band outside 0..1,
+//!   `h / run_time` below the float type's smallest normal number (1.2·10⁻³⁸ in `f32`), and a
+//!   run time below 2 × that number / ε (2·10⁻³¹ s in `f32`, 2·10⁻²⁹² s in `f64`): the pulse
+//!   for a small error would be a subnormal number of seconds, rounded by more than the
+//!   estimate's ε²/4 of the stroke.
 //!
 //! With a positional [`Pid`](crate::Pid), feed the *changes* of its output to
 //! [`update_delta`](ThreePoint::update_delta) (the velocity form): changes too small for a pulse
@@ -168,6 +172,14 @@ impl<F: Real> ThreePoint<F> {
                 "min_pulse must not exceed run_time: the shortest pulse would move the actuator more than its whole stroke",
             ));
         }
+        // A pulse for an error of e is e·run_time seconds: below 2·(smallest normal)/ε a small
+        // error's pulse is subnormal, rounded by more than ε²/4 of the stroke (the estimate's
+        // own resolution, stated): 10⁻³⁷ s in `f32` left the motor by 29 × the bound.
+        if config.run_time < F::min_positive_value() * F::from_u16(2) / F::epsilon() {
+            return Err(ActuatorError::Config(
+                "run_time is below 2 × the smallest normal number / ε of the float type: the pulse for a small error would be a subnormal number of seconds, too coarse for the estimate",
+            ));
+        }
         if config.h / config.run_time < F::min_positive_value() {
             return Err(ActuatorError::Config(
                 "h / run_time is below the smallest normal number of the float type: one sample's travel cannot be resolved",
@@ -280,16 +292,16 @@ impl<F: Real> ThreePoint<F> {
         if pending == F::zero() || (end.is_none() && pending.abs() < self.smallest_move()) {
             return Ok(Drive::Stop);
         }
-        let (hi, lo) = (self.position, self.carry);
         let error = end.map_or(pending, |e| self.error_to(e));
-        let (drive, covered) = self.drive(error, end);
+        let (drive, moved) = self.drive(error, end);
         self.pending = match end {
             Some(e) => Sum::of(self.error_to(e)),
-            None if covered => Sum::new(),
-            // What the estimate moved, taken off the request.
+            // What the estimate was moved by, taken off the request exactly: a pulse that
+            // covers the pending change leaves its carry, a request that waited below half an
+            // ulp of it (resetting to 0 lost one every such pulse: the eighth attack).
             None => {
                 let mut left = self.pending;
-                left.add(-((self.position - hi) + (self.carry - lo)));
+                left.add(-moved);
                 left
             }
         };
@@ -334,11 +346,12 @@ impl<F: Real> ThreePoint<F> {
     /// at least the minimum pulse; the estimate moves with it and never past the target.
     /// `target` is the target when it is a number (the positional form, or an end), so a pulse
     /// that covers the whole error puts the estimate exactly on it; the velocity form's target
-    /// is `estimate + error`, which need not be one. Returns the pulse and whether it covered
-    /// the whole error. The callers ask only for errors of at least a minimum pulse's travel,
+    /// is `estimate + error`, which need not be one. Returns the pulse and the travel it added
+    /// to the estimate (without a target: the whole error when the pulse covers it, one
+    /// sample's travel otherwise; 0 for no pulse). The callers ask only for errors of at least a minimum pulse's travel,
     /// or for an end (which stops the actuator): lengthening a pulse to `min_pulse` then only
     /// absorbs rounding or runs into the stop.
-    fn drive(&mut self, error: F, target: Option<F>) -> (Drive<F>, bool) {
+    fn drive(&mut self, error: F, target: Option<F>) -> (Drive<F>, F) {
         let gt = self.config.run_time;
         let wanted = error.abs() * gt;
         let mut seconds = wanted.min(self.config.h).max(self.config.min_pulse);
@@ -347,22 +360,24 @@ impl<F: Real> ThreePoint<F> {
             // drive, unless the target is an end — a valve a subnormal distance from shut is
             // asked to shut, and shuts: a whole sample into the stop, which ends it.
             if !matches!(target, Some(t) if t == F::zero() || t == F::one()) {
-                return (Drive::Stop, false);
+                return (Drive::Stop, F::zero());
             }
             seconds = self.config.h;
         }
         // A whole sample's travel, unless that covers the error.
         let step = seconds / gt;
-        let covered = wanted <= seconds || step >= error.abs();
-        if covered {
+        let moved = if wanted <= seconds || step >= error.abs() {
             // The pulse covers the whole error (or runs into the stop).
             match target {
                 Some(t) => self.set(t),
                 None => self.advance(error),
             }
+            error
         } else {
-            self.advance(if error > F::zero() { step } else { -step });
-        }
+            let step = if error > F::zero() { step } else { -step };
+            self.advance(step);
+            step
+        };
         let drive = if error > F::zero() {
             self.driven.0 = self.driven.0 + seconds;
             Drive::Open(seconds)
@@ -370,7 +385,7 @@ impl<F: Real> ThreePoint<F> {
             self.driven.1 = self.driven.1 + seconds;
             Drive::Close(seconds)
         };
-        (drive, covered)
+        (drive, moved)
     }
 }
 

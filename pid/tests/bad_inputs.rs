@@ -665,6 +665,8 @@ macro_rules! actuator_table {
         let pulse = "min_pulse must be in 0..=h";
         let pulse_stroke = "min_pulse must not exceed run_time: the shortest pulse would move the actuator more than its whole stroke";
         let ratio = "h / run_time is below the smallest normal number of the float type: one sample's travel cannot be resolved";
+        let short = "run_time is below 2 × the smallest normal number / ε of the float type: the pulse for a small error would be a subnormal number of seconds, too coarse for the estimate";
+        let floor = F::MIN_POSITIVE * 2.0 / F::EPSILON;
         let band = "dead_band must be in 0..1";
         let position = "position must be in 0..=1";
         // new: (what, config, position, Ok or the message)
@@ -676,7 +678,9 @@ macro_rules! actuator_table {
             ("run_time inf", ActuatorConfig { run_time: inf, ..base }, 0.0, Err(run_time)),
             ("run_time MIN", ActuatorConfig { run_time: min, ..base }, 0.0, Err(run_time)),
             ("run_time MAX", ActuatorConfig { run_time: max, ..base }, 0.0, Err(ratio)),
-            ("run_time subnormal", ActuatorConfig { run_time: sub, min_pulse: 0.0, ..base }, 0.0, Ok(())),
+            ("run_time subnormal", ActuatorConfig { run_time: sub, min_pulse: 0.0, ..base }, 0.0, Err(short)),
+            ("run_time 2·MIN_POSITIVE/ε", ActuatorConfig { run_time: floor, h: floor, min_pulse: 0.0, ..base }, 0.0, Ok(())),
+            ("run_time an ulp below 2·MIN_POSITIVE/ε", ActuatorConfig { run_time: F::from_bits(floor.to_bits() - 1), h: floor, min_pulse: 0.0, ..base }, 0.0, Err(short)),
             ("h 0", ActuatorConfig { h: 0.0, ..base }, 0.0, Err(h)),
             ("h NaN", ActuatorConfig { h: nan, ..base }, 0.0, Err(h)),
             ("h -inf", ActuatorConfig { h: -inf, ..base }, 0.0, Err(h)),
@@ -740,9 +744,10 @@ macro_rules! actuator_table {
         let mut b = a.clone();
         assert_eq!(b.update_delta(nan), Err(ActuatorError::NotFinite));
         assert_eq!(b.update_delta(0.001), a.update_delta(0.001));
-        // A subnormal run time: every sample's travel is the whole stroke; the estimate stays
-        // in 0..=1 and a target at an end is reached in one sample.
-        let mut fast = ThreePoint::new(ActuatorConfig { run_time: sub, min_pulse: 0.0, ..base }, 0.0).unwrap();
+        // The shortest run time accepted (a subnormal one is refused, above): every sample's
+        // travel is the whole stroke many times over; the estimate stays in 0..=1 and a target
+        // at an end is reached in one sample.
+        let mut fast = ThreePoint::new(ActuatorConfig { run_time: floor, min_pulse: 0.0, ..base }, 0.0).unwrap();
         assert!(matches!(fast.update(1.0), Ok(Drive::Open(_))));
         assert_eq!(fast.position(), 1.0, "subnormal run time");
         // at_end re-anchors the estimate at either end, from anywhere.
