@@ -364,7 +364,9 @@ impl<F: Real> ThreePoint<F> {
             }
             seconds = self.config.h;
         }
-        // A whole sample's travel, unless that covers the error.
+        // A whole sample's travel, unless that covers the error. The error is never 0 here (the
+        // callers stop first), so its sign is the direction.
+        let opening = error > F::zero();
         let step = seconds / gt;
         let moved = if wanted <= seconds || step >= error.abs() {
             // The pulse covers the whole error (or runs into the stop).
@@ -374,11 +376,11 @@ impl<F: Real> ThreePoint<F> {
             }
             error
         } else {
-            let step = if error > F::zero() { step } else { -step };
+            let step = if opening { step } else { -step };
             self.advance(step);
             step
         };
-        let drive = if error > F::zero() {
+        let drive = if opening {
             self.driven.0 = self.driven.0 + seconds;
             Drive::Open(seconds)
         } else {

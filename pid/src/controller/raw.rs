@@ -309,11 +309,11 @@ pub(crate) fn gate<T: Scalar, R: Raw>(pid: &Pid<T>, lsb: f64, max: f64) -> u8 {
         let tracking = product(ao, ys.max(g) + v);
         let i = g + integral_step + tracking;
         let centre = product(slope, g) + i_mid + g;
-        // Every bound is a sum of non-negative terms, so these six cover all the values above
+        // Every bound is a sum of non-negative terms, so these five cover all the values above
         // and their partial sums (b·r − y is br + g, P + I is below v, the centre and the new
-        // integral below their difference's bound, …).
-        (g + g)
-            .max(br + g)
+        // integral below their difference's bound, r − y's 2g below the output's bound, which
+        // is at least 3g, …).
+        (br + g)
             .max(yd + g)
             .max(d_raw)
             .max(ys.max(g) + v)
