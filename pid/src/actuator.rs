@@ -23,12 +23,15 @@
 //!   small to be a time; the stop ends it): a valve asked to shut, shuts.
 //! - Velocity form: requests smaller than `smallest_move()` wait and add up (kept as a change
 //!   in a compensated sum, so neither a change below the estimate's resolution nor one below
-//!   half an ulp of what is already pending is lost: 4·10⁻¹⁰ a request on 0.0099 in `f32`; a
-//!   pulse takes off the request exactly the travel it drives, so what waited under it stays).
-//!   When the requests add up to an end (within 64 ulps of it: the rounding of changes that
-//!   should reach it exactly, e.g. a
-//!   saturating controller's), the actuator is driven into that stop however little is left, as
-//!   in the positional form: a valve asked to shut, shuts.
+//!   half an ulp of what is already pending is lost — 4·10⁻¹⁰ a request on 0.0099 in `f32` —
+//!   down to the sum's own resolution, about ε²/2 of the pending change; a pulse takes off the
+//!   request exactly the travel it drives, so what waited under it stays, and an end switch
+//!   ([`at_end`](ThreePoint::at_end)) keeps the requests away from its end). When the
+//!   requests add up to an end (within 64 ulps of it: the rounding of changes that should reach
+//!   it exactly, e.g. a saturating controller's), the actuator is driven into that stop however
+//!   little is left, as in the positional form: a valve asked to shut, shuts; the travel this
+//!   takes beyond the requests stays as a request away from the end, so requests to and fro
+//!   across the margin are neither lost nor turned into pulses to and fro.
 //! - The estimate stays in 0..=1 and follows a motor that moves `s / run_time` per pulse and
 //!   stops at its ends, within ε·(4 + strokes travelled) + pulses·ε²/4 (ε the float type's
 //!   epsilon: 1.2·10⁻⁷ in `f32`), in both forms and at any ratio `h / run_time` the
@@ -279,40 +282,46 @@ impl<F: Real> ThreePoint<F> {
             self.pending = wanted;
             pending
         };
-        // A request toward an end that reaches it (up to rounding of the changes that add up
-        // to it) is a request for the end: driven into the stop however little is left.
+        // A request that reaches an end's margin (the rounding of changes that add up to it) is
+        // a request for the end: driven into the stop however little is left, and nothing
+        // when the estimate is there already.
         let near = end_margin::<F>();
-        let end = if pending > F::zero() && pending >= up - near {
+        let end = if pending >= up - near {
             Some(F::one())
-        } else if pending < F::zero() && pending <= down + near {
+        } else if pending <= down + near {
             Some(F::zero())
         } else {
             None
         };
-        if pending == F::zero() || (end.is_none() && pending.abs() < self.smallest_move()) {
+        let error = end.map_or(pending, |e| self.error_to(e));
+        if error == F::zero() || (end.is_none() && pending.abs() < self.smallest_move()) {
             return Ok(Drive::Stop);
         }
-        let error = end.map_or(pending, |e| self.error_to(e));
         let (drive, moved) = self.drive(error, end);
-        self.pending = match end {
-            Some(e) => Sum::of(self.error_to(e)),
-            // What the estimate was moved by, taken off the request exactly: a pulse that
-            // covers the pending change leaves its carry, a request that waited below half an
-            // ulp of it (resetting to 0 lost one every such pulse: the eighth attack).
-            None => {
-                let mut left = self.pending;
-                left.add(-moved);
-                left
-            }
-        };
+        // What the estimate was moved by, taken off the request exactly: a pulse that covers
+        // the pending change leaves its carry, a request that waited below half an ulp of it
+        // (resetting to 0 lost one every such pulse: the eighth attack); a pulse into a stop
+        // leaves the travel it took beyond the request as a request away from the end, which
+        // the next requests away from it use up (the end's margin, taken again and again,
+        // had turned requests to and fro across it into pulses to and fro that lost them: the
+        // ninth attack).
+        let mut left = self.pending;
+        left.add(-moved);
+        self.pending = left;
         Ok(drive)
     }
 
-    /// An end-position switch: the actuator is known to be fully open (`true`) or closed.
+    /// An end-position switch: the actuator is known to be fully open (`true`) or closed. The
+    /// estimate is re-anchored there; a waiting request beyond that end is dropped (no
+    /// windup), one away from it is kept — a switch is a level, read every sample while it is
+    /// made, and dropping those left the valve at the end for good.
     pub fn at_end(&mut self, open: bool) {
         self.position = if open { F::one() } else { F::zero() };
         self.carry = F::zero();
-        self.pending = Sum::new();
+        let pending = self.pending.value();
+        if (open && pending > F::zero()) || (!open && pending < F::zero()) {
+            self.pending = Sum::new();
+        }
     }
 
     /// `target − estimate`, with the estimate's carry.

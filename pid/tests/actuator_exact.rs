@@ -435,3 +435,92 @@ fn a_run_time_too_short_for_a_pulse_to_be_a_normal_time_is_refused() {
     check::<f32>();
     check::<f64>();
 }
+
+/// An end switch is a level: firmware reads it every sample while it is made. Re-anchoring on it
+/// keeps the requests that move away from that end (the ninth attack: `at_end` cleared every
+/// waiting request, so close requests below the smallest move never added up and the valve
+/// stayed open for good — 0 pulses after asking for −100 strokes). Both ends, `f32` and `f64`.
+#[test]
+fn an_end_switch_read_every_sample_keeps_the_requests_away_from_it() {
+    fn check<F: regler_pid::Real>() {
+        let f = F::from_f64_nearest;
+        let config = ActuatorConfig {
+            run_time: f(60.0),
+            min_pulse: f(0.2),
+            dead_band: f(0.005),
+            h: F::one(),
+        };
+        for (open, away) in [(true, f(-0.001)), (false, f(0.001))] {
+            let start = if open { F::one() } else { F::zero() };
+            let mut v = ThreePoint::new(config, start).unwrap();
+            let mut first = None;
+            for k in 0..100 {
+                v.at_end(open); // the switch still made: the valve has not moved yet
+                if v.update_delta(away).unwrap() != Drive::Stop {
+                    first = Some(k);
+                    break;
+                }
+            }
+            // 0.005 (the dead band) asked for after 5 requests: driven at the fifth.
+            assert_eq!(first, Some(4), "open {open}");
+        }
+        // A request beyond the end the switch reports is dropped (no windup).
+        let mut v = ThreePoint::new(config, F::one()).unwrap();
+        assert_eq!(v.update_delta(f(0.003)).unwrap(), Drive::Stop);
+        v.at_end(true);
+        assert_eq!(v.update_delta(f(-0.003)).unwrap(), Drive::Stop);
+        assert_eq!(v.update_delta(f(-0.003)).unwrap(), Drive::Close(f(0.36)));
+    }
+    check::<f32>();
+    check::<f64>();
+}
+
+/// Requests that reach an end's margin (64 ulps) are driven into the stop; the travel that
+/// took beyond what was asked stays as a request away from the end, so requests going back
+/// and forth across the margin are neither lost nor turned into pulses to and fro (the ninth
+/// attack: `[−0.001, +0.000995]` from fully open lost 5·10⁻⁶ a cycle, the whole −0.05 asked
+/// over 10 000 cycles, with a pulse each way every cycle).
+#[test]
+#[cfg_attr(
+    miri,
+    ignore = "40 000 requests: minutes under Miri; runs natively in every CI run"
+)]
+fn requests_across_an_ends_margin_are_neither_lost_nor_hunted() {
+    fn check<F: regler_pid::Real>(config: ActuatorConfig<F>, back: F, forth: F, cycles: u32) {
+        let mut v = ThreePoint::new(config, F::one()).unwrap();
+        let (mut asked, mut pulses) = (0.0f64, 0u32);
+        for _ in 0..cycles {
+            for d in [back, forth] {
+                asked += d.to_f64_exact();
+                pulses += u32::from(v.update_delta(d).unwrap() != Drive::Stop);
+            }
+        }
+        let moved = v.position().to_f64_exact() - 1.0;
+        assert!(
+            (moved - asked).abs() <= 2.0 * v.smallest_move().to_f64_exact(),
+            "asked {asked:e}, moved {moved:e}"
+        );
+        assert!(pulses <= cycles + 2, "{pulses} pulses in {cycles} cycles");
+    }
+    let f32_config = ActuatorConfig {
+        run_time: 60.0f32,
+        min_pulse: 0.01,
+        dead_band: 0.001,
+        h: 1.0,
+    };
+    check(f32_config, -0.001f32, 0.000_995, 10_000);
+    let tiny = ActuatorConfig {
+        run_time: 100.0f32,
+        min_pulse: 1e-5,
+        dead_band: 0.0,
+        h: 1.0,
+    };
+    check(tiny, -2e-7f32, 1e-9, 10_000);
+    let f64_config = ActuatorConfig {
+        run_time: 60.0f64,
+        min_pulse: 0.01,
+        dead_band: 0.001,
+        h: 1.0,
+    };
+    check(f64_config, -0.001f64, 0.001 - 1e-14, 10_000);
+}
