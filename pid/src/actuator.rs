@@ -27,11 +27,13 @@
 //!   down to the sum's own resolution, about ε²/2 of the pending change; a pulse takes off the
 //!   request exactly the travel it drives, so what waited under it stays, and an end switch
 //!   ([`at_end`](ThreePoint::at_end)) keeps the requests away from its end). When the
-//!   requests add up to an end (within 64 ulps of it: the rounding of changes that should reach
-//!   it exactly, e.g. a saturating controller's), the actuator is driven into that stop however
-//!   little is left, as in the positional form: a valve asked to shut, shuts; the travel this
-//!   takes beyond the requests stays as a request away from the end, so requests to and fro
-//!   across the margin are neither lost nor turned into pulses to and fro.
+//!   requests add up to an end (within 32·ε of it, ε the float type's epsilon: the rounding of
+//!   changes that should reach it exactly, e.g. a saturating controller's), the actuator is
+//!   driven into that stop however little is left, as in the positional form: a valve asked to
+//!   shut, shuts. The travel this takes beyond the requests stays as a request away from the
+//!   end, and a valve in its stop leaves it only for a request more than 64·ε away: requests to
+//!   and fro near an end are neither lost nor amplified — the travel driven is at most twice
+//!   what they ask (one margin, once per visit to the stop).
 //! - The estimate stays in 0..=1 and follows a motor that moves `s / run_time` per pulse and
 //!   stops at its ends, within ε·(4 + strokes travelled) + pulses·ε²/4 (ε the float type's
 //!   epsilon: 1.2·10⁻⁷ in `f32`), in both forms and at any ratio `h / run_time` the
@@ -42,7 +44,7 @@
 //!   the estimate is a compensated sum, so one sample's travel is neither rounded away nor
 //!   rounded the same way every sample (1 ms on a 200 s valve is 5·10⁻⁶ of the stroke: a plain
 //!   `f32` sum near 0.5 rounds each by up to 0.6 %, one on a 10⁵ s valve it loses entirely). The
-//!   estimate is never snapped onto an end; only targets within 64 ulps of an end count as the
+//!   estimate is never snapped onto an end; only targets within 64·ε of an end count as the
 //!   end.
 //! - Refused by [`ThreePoint::new`]: a run time or h that is not finite and positive, a minimum
 //!   pulse outside 0..=h or longer than the run time, a dead band outside 0..1,
@@ -227,7 +229,7 @@ impl<F: Real> ThreePoint<F> {
             .max(self.config.min_pulse / self.config.run_time)
     }
 
-    /// Positional form: drive toward `target` (clamped into 0..=1; within 64 ulps of an end it
+    /// Positional form: drive toward `target` (clamped into 0..=1; within 64·ε of an end it
     /// counts as that end).
     ///
     /// An error smaller than [`smallest_move`](Self::smallest_move) is not driven: a minimum
@@ -255,7 +257,8 @@ impl<F: Real> ThreePoint<F> {
 
     /// Velocity form: the controller asks for a change of `delta` (fraction of the stroke).
     /// Changes too small to drive add up until they are not; the part of a request beyond an
-    /// end is dropped (no windup). When what has been asked adds up to an end (within 64 ulps),
+    /// end is dropped (no windup). When what has been asked adds up to an end (within 32·ε; a
+    /// valve in its stop leaves it only for a request more than 64·ε away),
     /// the actuator is driven into the stop as in the positional form, however little is left
     /// (at least one minimum pulse): a valve asked to shut, shuts.
     ///
@@ -284,8 +287,16 @@ impl<F: Real> ThreePoint<F> {
         };
         // A request that reaches an end's margin (the rounding of changes that add up to it) is
         // a request for the end: driven into the stop however little is left, and nothing
-        // when the estimate is there already.
-        let near = end_margin::<F>();
+        // when the estimate is there already. The margin has hysteresis: 64ε to leave a stop
+        // the estimate stands in, 32ε to be taken into one — with one margin, requests to and
+        // fro across it drove 64ε to and fro whatever their size (the tenth attack).
+        let at_stop =
+            self.carry == F::zero() && (self.position == F::zero() || self.position == F::one());
+        let near = if at_stop {
+            end_margin::<F>()
+        } else {
+            end_margin::<F>() * c_half::<F>()
+        };
         let end = if pending >= up - near {
             Some(F::one())
         } else if pending <= down + near {
@@ -314,7 +325,11 @@ impl<F: Real> ThreePoint<F> {
     /// An end-position switch: the actuator is known to be fully open (`true`) or closed. The
     /// estimate is re-anchored there; a waiting request beyond that end is dropped (no
     /// windup), one away from it is kept — a switch is a level, read every sample while it is
-    /// made, and dropping those left the valve at the end for good.
+    /// made, and dropping those left the valve at the end for good. Read the switch before the
+    /// sample's [`update`](Self::update) or [`update_delta`](Self::update_delta): after it, a
+    /// switch still made (the pulse has not run yet) re-anchors away the travel just driven. A
+    /// switch stuck made is not detected here: the estimate then follows the switch, not the
+    /// valve.
     pub fn at_end(&mut self, open: bool) {
         self.position = if open { F::one() } else { F::zero() };
         self.carry = F::zero();
@@ -398,6 +413,11 @@ impl<F: Real> ThreePoint<F> {
         };
         (drive, moved)
     }
+}
+
+/// ½, exactly.
+fn c_half<F: Real>() -> F {
+    F::one() / F::from_u16(2)
 }
 
 /// How close to an end a target or a request counts as the end: 64 ulps of 1 (rounding of a
