@@ -531,7 +531,7 @@ fn requests_across_an_ends_margin_are_neither_lost_nor_hunted() {
 /// 999 reversals in 1 000 samples). The margin now has hysteresis (64·ε to leave a stop, 32·ε
 /// to be taken into one): the travel driven is at most twice what is asked, plus one margin,
 /// and the estimate ends within one margin of what was asked. Both ends, `f32` and `f64`,
-/// dither from far below the margin to a few times it.
+/// dither from far below the margin to a few times it, after a request waiting 0 to 63·ε.
 #[test]
 fn requests_to_and_fro_near_an_end_are_not_amplified() {
     fn check<F: regler_pid::Real>(min_pulse: F) {
@@ -546,7 +546,7 @@ fn requests_to_and_fro_near_an_end_are_not_amplified() {
         for open in [true, false] {
             let sign = if open { -1.0 } else { 1.0 };
             for d in [0.05, 0.4, 3.0, 20.0, 70.0, 130.0] {
-                for wait in [0.0, 50.0, 63.0] {
+                for wait in [0.0, 20.0, 31.0, 50.0, 63.0] {
                     let start = if open { F::one() } else { F::zero() };
                     let mut v = ThreePoint::new(config, start).unwrap();
                     let (mut asked, mut travel) = (0.0f64, 0.0f64);
