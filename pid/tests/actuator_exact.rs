@@ -464,12 +464,23 @@ fn an_end_switch_read_every_sample_keeps_the_requests_away_from_it() {
             // 0.005 (the dead band) asked for after 5 requests: driven at the fifth.
             assert_eq!(first, Some(4), "open {open}");
         }
-        // A request beyond the end the switch reports is dropped (no windup).
-        let mut v = ThreePoint::new(config, F::one()).unwrap();
-        assert_eq!(v.update_delta(f(0.003)).unwrap(), Drive::Stop);
-        v.at_end(true);
-        assert_eq!(v.update_delta(f(-0.003)).unwrap(), Drive::Stop);
-        assert_eq!(v.update_delta(f(-0.003)).unwrap(), Drive::Close(f(0.36)));
+        // A request beyond the end the switch reports is dropped (no windup), and so does not
+        // absorb the next requests away from it: from mid-stroke, 0.003 waits toward the end
+        // the switch then reports; −0.003 twice is the dead band's 0.005 and more, driven at
+        // the second.
+        for (open, toward) in [(true, f(0.003)), (false, f(-0.003))] {
+            let mut v = ThreePoint::new(config, f(0.5)).unwrap();
+            assert_eq!(v.update_delta(toward).unwrap(), Drive::Stop);
+            v.at_end(open);
+            assert_eq!(v.update_delta(-toward).unwrap(), Drive::Stop);
+            let second = v.update_delta(-toward).unwrap();
+            let expected = if open {
+                Drive::Close(f(0.36))
+            } else {
+                Drive::Open(f(0.36))
+            };
+            assert_eq!(second, expected, "open {open}");
+        }
     }
     check::<f32>();
     check::<f64>();
