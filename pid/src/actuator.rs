@@ -31,9 +31,10 @@
 //!   changes that should reach it exactly, e.g. a saturating controller's), the actuator is
 //!   driven into that stop however little is left, as in the positional form: a valve asked to
 //!   shut, shuts. The travel this takes beyond the requests stays as a request away from the
-//!   end, and a valve in its stop leaves it only for a request more than 64·ε away: requests to
-//!   and fro near an end are neither lost nor amplified — the travel driven is at most twice
-//!   what they ask (one margin, once per visit to the stop).
+//!   end, and a valve taken into a stop (on its way, or standing in it) is taken out again only
+//!   for a request more than 64·ε away: requests to and fro near an end are neither lost nor
+//!   amplified — the travel driven is at most twice what they ask (one margin, once per visit
+//!   to the stop).
 //! - The estimate stays in 0..=1 and follows a motor that moves `s / run_time` per pulse and
 //!   stops at its ends, within ε·(4 + strokes travelled) + pulses·ε²/4 (ε the float type's
 //!   epsilon: 1.2·10⁻⁷ in `f32`), in both forms and at any ratio `h / run_time` the
@@ -147,6 +148,9 @@ pub struct ThreePoint<F = f64> {
     /// stroke that is left; compensated, so a request below half an ulp of what is pending
     /// still adds up.
     pending: Sum<F>,
+    /// Velocity form: the end the valve is being taken into or held at, until the request
+    /// leaves its wider margin (64·ε; 32·ε to be taken in).
+    toward: Option<F>,
     /// Seconds driven open and closed in total (wear, and a check on the estimate).
     driven: (F, F),
 }
@@ -204,6 +208,7 @@ impl<F: Real> ThreePoint<F> {
             position,
             carry: F::zero(),
             pending: Sum::new(),
+            toward: None,
             driven: (F::zero(), F::zero()),
         })
     }
@@ -247,6 +252,7 @@ impl<F: Real> ThreePoint<F> {
         }
         let target = snap_to_end(target);
         self.pending = Sum::new();
+        self.toward = None;
         let error = self.error_to(target);
         let at_end = target == F::zero() || target == F::one();
         if error == F::zero() || (!at_end && error.abs() < self.smallest_move()) {
@@ -287,23 +293,36 @@ impl<F: Real> ThreePoint<F> {
         };
         // A request that reaches an end's margin (the rounding of changes that add up to it) is
         // a request for the end: driven into the stop however little is left, and nothing
-        // when the estimate is there already. The margin has hysteresis: 64ε to leave a stop
-        // the estimate stands in, 32ε to be taken into one — with one margin, requests to and
-        // fro across it drove 64ε to and fro whatever their size (the tenth attack).
-        let at_stop =
-            self.carry == F::zero() && (self.position == F::zero() || self.position == F::one());
-        let near = if at_stop {
-            end_margin::<F>()
-        } else {
-            end_margin::<F>() * c_half::<F>()
-        };
-        let end = if pending >= up - near {
+        // when the estimate is there already. The margin has hysteresis: 32ε to be taken into
+        // a stop, 64ε to be taken out again — with one margin, requests to and fro across it
+        // drove 64ε to and fro whatever their size (the tenth attack). The end held is the one
+        // the valve is being taken into (kept from sample to sample: a valve on its way in
+        // partial pulses was sent back and forth by tiny requests across the margin, the
+        // eleventh attack), or the stop the estimate stands in.
+        let standing = if self.carry != F::zero() {
+            None
+        } else if self.position == F::one() {
             Some(F::one())
-        } else if pending <= down + near {
+        } else if self.position == F::zero() {
             Some(F::zero())
         } else {
             None
         };
+        let reaches = |end: F, margin: F| {
+            if end == F::one() {
+                pending >= up - margin
+            } else {
+                pending <= down + margin
+            }
+        };
+        let (enter, leave) = (end_margin::<F>() * c_half::<F>(), end_margin::<F>());
+        let end = match self.toward.or(standing) {
+            Some(held) if reaches(held, leave) => Some(held),
+            _ if reaches(F::one(), enter) => Some(F::one()),
+            _ if reaches(F::zero(), enter) => Some(F::zero()),
+            _ => None,
+        };
+        self.toward = end;
         let error = end.map_or(pending, |e| self.error_to(e));
         if error == F::zero() || (end.is_none() && pending.abs() < self.smallest_move()) {
             return Ok(Drive::Stop);
@@ -333,6 +352,7 @@ impl<F: Real> ThreePoint<F> {
     pub fn at_end(&mut self, open: bool) {
         self.position = if open { F::one() } else { F::zero() };
         self.carry = F::zero();
+        self.toward = None;
         let pending = self.pending.value();
         if (open && pending > F::zero()) || (!open && pending < F::zero()) {
             self.pending = Sum::new();

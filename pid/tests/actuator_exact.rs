@@ -592,3 +592,55 @@ fn requests_to_and_fro_near_an_end_are_not_amplified() {
     check::<f32>(60.0 * 3e-6);
     check::<f64>(0.0);
 }
+
+/// A valve still on its way into a stop in partial pulses is not sent back and forth by tiny
+/// requests across the margin (the eleventh attack: a 300 s valve sampled every 1 ms in `f32`,
+/// 32.5·ε from the closed end, and requests of ±ε: every sample a whole sample's travel toward
+/// the end, then back, 27 × the travel asked). The decision to take the valve into a stop holds
+/// from sample to sample until the request leaves the wider margin.
+#[test]
+fn a_valve_on_its_way_into_a_stop_is_not_sent_back_and_forth() {
+    fn check<F: regler_pid::Real>(run_time: F, h: F) {
+        let e = F::epsilon();
+        let f = F::from_f64_nearest;
+        let config = ActuatorConfig {
+            run_time,
+            min_pulse: F::zero(),
+            dead_band: F::zero(),
+            h,
+        };
+        let mut v = ThreePoint::new(config, F::zero()).unwrap();
+        let (mut asked, mut driven, mut visits, mut was) = (0.0f64, 0.0f64, 0u32, true);
+        let gt = run_time.to_f64_exact();
+        let mut step = |v: &mut ThreePoint<F>, d: F| {
+            let s = match v.update_delta(d).unwrap() {
+                Drive::Stop => 0.0,
+                Drive::Open(s) | Drive::Close(s) => s.to_f64_exact(),
+            };
+            asked += d.to_f64_exact().abs();
+            driven += s / gt;
+            let now = v.position() == F::zero() || v.position() == F::one();
+            visits += u32::from(now && !was);
+            was = now;
+        };
+        step(&mut v, e * f(65.0)); // out of the stop (more than 64·ε)
+        step(&mut v, -e * f(32.5)); // back to 32.5·ε, just outside the 32·ε margin
+        for _ in 0..10 {
+            step(&mut v, F::zero());
+        }
+        for _ in 0..1_000 {
+            step(&mut v, -e);
+            step(&mut v, e);
+        }
+        let e = e.to_f64_exact();
+        let bound = 2.0 * asked + 64.0 * e * f64::from(visits + 1);
+        assert!(
+            driven <= bound,
+            "travel {} ε > bound {} ε",
+            driven / e,
+            bound / e
+        );
+    }
+    check(300.0f32, 0.001);
+    check(1.0 / (20.0 * f64::EPSILON), 1.0f64);
+}
